@@ -1,0 +1,99 @@
+"""A model: a validated collection of components."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from functools import cached_property
+
+from .components import Contact, Damper, HarmonicForce, Mass, Param, Spring
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """Masses and the components acting on them.
+
+    Parameters
+    ----------
+    masses : sequence of Mass
+    springs, dampers, forces, contacts : sequence of the matching components
+    name : str
+        A label for outputs.
+    """
+
+    masses: tuple[Mass, ...]
+    springs: tuple[Spring, ...] = ()
+    dampers: tuple[Damper, ...] = ()
+    forces: tuple[HarmonicForce, ...] = ()
+    contacts: tuple[Contact, ...] = ()
+    name: str = "model"
+
+    def __post_init__(self):
+        for f in ("masses", "springs", "dampers", "forces", "contacts"):
+            object.__setattr__(self, f, tuple(getattr(self, f)))
+        if not self.masses:
+            raise ValueError("a model needs at least one mass")
+        names = [m.name for m in self.masses]
+        if len(set(names)) != len(names):
+            raise ValueError(f"mass names must be unique, got {names}")
+        coords = set(self.coordinates)
+        for comp in (*self.springs, *self.dampers):
+            for c in comp.coordinates:
+                if c not in coords:
+                    raise ValueError(f"{type(comp).__name__.lower()} refers to coordinate {c!r}, "
+                                     f"which no mass has (known: {sorted(coords)})")
+        by_name = {m.name: m for m in self.masses}
+        for comp in self.forces:
+            if by_name.get(comp.mass.name) != comp.mass:
+                raise ValueError(f"force acts on mass {comp.mass.name!r}, which is not in the model")
+        cnames = [c.name for c in self.contacts]
+        if len(set(cnames)) != len(cnames):
+            raise ValueError(f"contact names must be unique, got {cnames}")
+        for c in self.contacts:
+            for b in c.bodies:
+                if by_name.get(b.name) != b:
+                    raise ValueError(f"contact {c.name} touches mass {b.name!r}, which is not in the model")
+        self.parameters  # raises on conflicting shared parameters
+
+    @property
+    def components(self) -> tuple:
+        return (*self.masses, *self.springs, *self.dampers, *self.forces, *self.contacts)
+
+    @property
+    def coordinates(self) -> tuple[str, ...]:
+        """Coordinate names in state order (mass by mass, ``x`` before ``y``)."""
+        return tuple(c for m in self.masses for c in m.coordinates)
+
+    @cached_property
+    def parameters(self) -> dict[str, float]:
+        """Every numeric parameter by symbol name, in a fixed order."""
+        out: dict[str, float] = {}
+        params = []
+        for comp in self.components:
+            params += list(comp.parameters().values())
+        for c in self.contacts:
+            params += list(c.friction.parameters().values())
+        for p in params:
+            if p.name in out and out[p.name] != p.value:
+                raise ValueError(f"parameter {p.name} is shared with two values: {out[p.name]} and {p.value}")
+            out[p.name] = p.value
+        return out
+
+    def structure(self) -> dict:
+        """Everything that fixes the equations' form, without numeric values."""
+        def pnames(comp):
+            return {k: v.name for k, v in comp.parameters().items()}
+        return {
+            "masses": [(m.name, m.dofs, pnames(m)) for m in self.masses],
+            "springs": [(s.a, s.b, pnames(s)) for s in self.springs],
+            "dampers": [(d.a, d.b, pnames(d)) for d in self.dampers],
+            "forces": [(f.mass.name, pnames(f)) for f in self.forces],
+            "contacts": [(c.name, c.body1.name, c.body2.name if c.body2 else None, pnames(c),
+                          [str(x) for x in c.friction.structure()]) for c in self.contacts],
+        }
+
+    def structure_key(self) -> str:
+        """A hash of :meth:`structure`: models with equal keys share compiled code."""
+        text = json.dumps(self.structure(), sort_keys=True, default=str)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]

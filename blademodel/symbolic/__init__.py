@@ -1,0 +1,6 @@
+"""Symbolic derivation of the equations of motion, per contact mode."""
+
+from .assembly import derive
+from .system import GuardSpec, HybridSystem, Mode, Transition
+
+__all__ = ["derive", "HybridSystem", "Mode", "GuardSpec", "Transition"]
