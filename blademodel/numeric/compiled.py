@@ -1,0 +1,136 @@
+"""Build, cache and load the compiled kernel of a model.
+
+The generated module is written once per model *structure* (what fixes the form
+of the equations, not the parameter values) into the cache folder, with a JSON
+file of metadata beside it. A later process with the same structure loads both
+without SymPy, and Numba's own cache (``cache=True``) skips compilation. Changing
+a parameter value never regenerates or recompiles anything.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import inspect
+import json
+import os
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+
+from ..model import Model
+
+_MEMO: dict[str, "CompiledSystem"] = {}
+
+
+def cache_dir() -> Path:
+    """Folder of generated kernels: ``$BLADEMODEL_CACHE_DIR`` or ``~/.cache/blademodel``."""
+    d = Path(os.environ.get("BLADEMODEL_CACHE_DIR", Path.home() / ".cache" / "blademodel"))
+    d.mkdir(parents=True, exist_ok=True)
+    return d
+
+
+def _code_version() -> str:
+    """Hash of the sources that shape generated code, so edits invalidate the cache."""
+    from ..components import friction as friction_pkg
+    from ..symbolic import assembly
+    from . import codegen, loop
+    h = hashlib.sha256()
+    mods = [assembly, codegen, loop]
+    for mod in mods:
+        h.update(inspect.getsource(mod).encode())
+    for path in sorted(Path(friction_pkg.__file__).parent.glob("*.py")):
+        h.update(path.read_bytes())
+    return h.hexdigest()[:12]
+
+
+@dataclass
+class CompiledSystem:
+    """A model's generated module and its metadata.
+
+    Attributes
+    ----------
+    module : module
+        The generated module (``integrate``, ``initial_mode``, ``derived``, ...).
+    meta : dict
+        ``state``, ``params``, ``modes``, ``guards``, ``coordinates``, ``energy``.
+    path : Path
+        The generated source file.
+    """
+
+    module: ModuleType
+    meta: dict
+    path: Path
+
+    @property
+    def state_names(self) -> list[str]:
+        return self.meta["state"]
+
+    @property
+    def mode_names(self) -> list[str]:
+        return self.meta["modes"]
+
+    def parameter_array(self, model: Model) -> np.ndarray:
+        """Raw parameter vector of ``model`` plus the hoisted constants."""
+        values = model.parameters
+        p = np.array([values[n] for n in self.meta["params"]], dtype=float)
+        return self.module.derived(p)
+
+
+def _load(path: Path) -> ModuleType:
+    name = f"blademodel_generated_{path.stem}"
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def compile_model(model: Model, *, energy: bool = False) -> CompiledSystem:
+    """Return the compiled kernel of ``model``, generating it only if needed.
+
+    Parameters
+    ----------
+    model : Model
+    energy : bool
+        Include the work/dissipation accumulators (a separate kernel).
+    """
+    key = f"{model.structure_key()}_{_code_version()}_{'e' if energy else 'n'}"
+    if key in _MEMO:
+        return _MEMO[key]
+    folder = cache_dir()
+    src_path = folder / f"k_{key}.py"
+    meta_path = folder / f"k_{key}.json"
+    if not (src_path.exists() and meta_path.exists()):
+        from .codegen import generate
+        from .jacobian import jacobians
+        system = derive_cached(model)
+        source, meta = generate(system, energy=energy)
+        source += "\n" + jacobians(system)
+        tmp = src_path.with_suffix(f".tmp{os.getpid()}")
+        tmp.write_text(source)
+        os.replace(tmp, src_path)
+        tmp = meta_path.with_suffix(f".tmp{os.getpid()}")
+        tmp.write_text(json.dumps(meta))
+        os.replace(tmp, meta_path)
+    meta = json.loads(meta_path.read_text())
+    compiled = CompiledSystem(_load(src_path), meta, src_path)
+    _MEMO[key] = compiled
+    return compiled
+
+
+_DERIVED: dict = {}
+
+
+def derive_cached(model: Model):
+    """``symbolic.derive(model)``, memoised per structure within the process."""
+    from ..symbolic import derive
+    key = model.structure_key()
+    if key not in _DERIVED:
+        _DERIVED[key] = derive(model)
+    return _DERIVED[key]

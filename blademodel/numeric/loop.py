@@ -1,0 +1,188 @@
+"""The generic hybrid RK4 loop with event location by bisection.
+
+This file is a *template*: its functions call ``rhs``, ``guards`` and
+``transition`` and read the tables ``N_GUARDS``, ``GUARD_DIR`` and
+``CLOSE_GUARD``, which the code generator (:mod:`.codegen`) writes for each model
+into the same generated module. It knows nothing of friction laws or contacts:
+only modes, guards with a crossing direction, and transitions.
+
+Status codes returned by :func:`integrate`: ``0`` done, ``1`` non-finite state,
+``2`` event storm (more than ``max_events`` events in one step).
+"""
+
+import math  # noqa: F401  (used by the generated code appended to this template)
+
+import numpy as np
+
+STATUS_OK = 0
+STATUS_NONFINITE = 1
+STATUS_EVENT_STORM = 2
+
+C_STEPS, C_EVENTS, C_BISECTIONS, C_RHS, C_LOGGED, C_RECORDS = 0, 1, 2, 3, 4, 5
+
+
+def rk4_step(mode, t, y, h, p, k1, k2, k3, k4, tmp, out):
+    """One classical RK4 step of size ``h`` from ``(t, y)`` in ``mode`` into ``out``."""
+    n = y.shape[0]
+    rhs(mode, t, y, p, k1)  # noqa: F821
+    for i in range(n):
+        tmp[i] = y[i] + 0.5 * h * k1[i]
+    rhs(mode, t + 0.5 * h, tmp, p, k2)  # noqa: F821
+    for i in range(n):
+        tmp[i] = y[i] + 0.5 * h * k2[i]
+    rhs(mode, t + 0.5 * h, tmp, p, k3)  # noqa: F821
+    for i in range(n):
+        tmp[i] = y[i] + h * k3[i]
+    rhs(mode, t + h, tmp, p, k4)  # noqa: F821
+    for i in range(n):
+        out[i] = y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+
+
+def crossed(g0, g1, direction):
+    """Whether a guard went from ``g0`` to ``g1`` through zero in ``direction``.
+
+    A falling guard fires from ``>= 0`` to ``< 0``, a rising one from ``<= 0`` to
+    ``> 0``: the state after the event lies strictly beyond the root, so the guard
+    cannot fire again at once.
+    """
+    if direction < 0:
+        return g0 >= 0.0 and g1 < 0.0
+    if direction > 0:
+        return g0 <= 0.0 and g1 > 0.0
+    return (g0 > 0.0 and g1 <= 0.0) or (g0 < 0.0 and g1 >= 0.0)
+
+
+def first_crossing(mode, g0, g1):
+    """Index of the first guard of ``mode`` that crossed, or -1."""
+    for i in range(N_GUARDS[mode]):  # noqa: F821
+        if crossed(g0[i], g1[i], GUARD_DIR[mode, i]):  # noqa: F821
+            return i
+    return -1
+
+
+def initial_mode(t, y, p, g, ytmp):
+    """Mode of the state ``y``: every contact with ``delta >= 0`` is closed.
+
+    Contacts are closed one at a time through their own closing transitions, so
+    the friction law's entry rules choose the closed mode.
+    """
+    mode = OPEN_MODE  # noqa: F821
+    for j in range(CLOSE_GUARD.shape[1]):  # noqa: F821
+        gi = CLOSE_GUARD[mode, j]  # noqa: F821
+        if gi < 0:
+            continue
+        guards(mode, t, y, p, g)  # noqa: F821
+        if g[gi] >= 0.0:
+            mode = transition(mode, gi, t, y, p, ytmp)  # noqa: F821
+    return mode
+
+
+def integrate(y, mode, p, period, steps_per_period, n_transient, n_record, record_every,
+              event_tol, max_events, rec_t, rec_y, rec_mode, poincare, log_t, log_guard,
+              log_from, log_to, counters):
+    """Integrate ``n_transient + n_record`` excitation periods from ``t = 0``.
+
+    The step is ``h = period / steps_per_period``, so ``t = n * period`` falls on
+    step ends (the Poincare section). After each (sub)step every guard of the
+    current mode is checked; on a crossing, the earliest event is bracketed by
+    bisection on the step fraction, re-integrating from the step start, until the
+    bracket is below ``event_tol * h``; the state is taken at the bracket's far end
+    (past the root), the transition is applied and the rest of the step follows.
+
+    ``y`` is updated in place. Returns ``(status, mode, t)``.
+    """
+    n = y.shape[0]
+    h = period / steps_per_period
+    k1 = np.empty(n)
+    k2 = np.empty(n)
+    k3 = np.empty(n)
+    k4 = np.empty(n)
+    tmp = np.empty(n)
+    y1 = np.empty(n)
+    ymid = np.empty(n)
+    ytmp = np.empty(n)
+    ng = GUARD_DIR.shape[1] + 1  # noqa: F821
+    g0 = np.empty(ng)
+    g1 = np.empty(ng)
+    gm = np.empty(ng)
+    max_log = log_t.shape[0]
+    t = 0.0
+    irec = 0
+    g0_valid = False
+    for per in range(n_transient + n_record):
+        recording = per >= n_transient
+        if recording and per == n_transient and irec < rec_t.shape[0]:
+            rec_t[irec] = t
+            rec_mode[irec] = mode
+            for i in range(n):
+                rec_y[irec, i] = y[i]
+            irec += 1
+        for j in range(steps_per_period):
+            t_end = period * per + (j + 1) * h
+            n_events = 0
+            while t < t_end:
+                dt = t_end - t
+                rk4_step(mode, t, y, dt, p, k1, k2, k3, k4, tmp, y1)
+                counters[C_RHS] += 4
+                if not g0_valid:
+                    guards(mode, t, y, p, g0)  # noqa: F821
+                guards(mode, t_end, y1, p, g1)  # noqa: F821
+                gi = first_crossing(mode, g0, g1)
+                if gi < 0:
+                    for i in range(n):
+                        y[i] = y1[i]
+                    for i in range(ng):
+                        g0[i] = g1[i]
+                    g0_valid = True
+                    t = t_end
+                    break
+                lo = 0.0
+                hi = 1.0
+                while (hi - lo) * dt > event_tol * h:
+                    mid = 0.5 * (lo + hi)
+                    rk4_step(mode, t, y, mid * dt, p, k1, k2, k3, k4, tmp, ymid)
+                    guards(mode, t + mid * dt, ymid, p, gm)  # noqa: F821
+                    counters[C_BISECTIONS] += 1
+                    counters[C_RHS] += 4
+                    if first_crossing(mode, g0, gm) >= 0:
+                        hi = mid
+                        for i in range(n):
+                            y1[i] = ymid[i]
+                        for i in range(ng):
+                            g1[i] = gm[i]
+                    else:
+                        lo = mid
+                gi = first_crossing(mode, g0, g1)
+                t = t_end if hi == 1.0 else t + hi * dt
+                for i in range(n):
+                    y[i] = y1[i]
+                new_mode = transition(mode, gi, t, y, p, ytmp)  # noqa: F821
+                g0_valid = False
+                if recording:
+                    k = counters[C_LOGGED]
+                    if k < max_log:
+                        log_t[k] = t
+                        log_guard[k] = gi
+                        log_from[k] = mode
+                        log_to[k] = new_mode
+                    counters[C_LOGGED] += 1
+                counters[C_EVENTS] += 1
+                mode = new_mode
+                n_events += 1
+                if n_events > max_events:
+                    return STATUS_EVENT_STORM, mode, t
+            counters[C_STEPS] += 1
+            for i in range(n):
+                if not math.isfinite(y[i]):
+                    return STATUS_NONFINITE, mode, t
+            if recording and (j + 1) % record_every == 0 and irec < rec_t.shape[0]:
+                rec_t[irec] = t
+                rec_mode[irec] = mode
+                for i in range(n):
+                    rec_y[irec, i] = y[i]
+                irec += 1
+        if recording:
+            for i in range(n):
+                poincare[per - n_transient, i] = y[i]
+    counters[C_RECORDS] = irec
+    return STATUS_OK, mode, t

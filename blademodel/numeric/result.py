@@ -1,0 +1,84 @@
+"""The result of a simulation."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+class SimulationError(RuntimeError):
+    """The integration stopped early; ``result`` holds what was computed."""
+
+    def __init__(self, message: str, result: "SimulationResult | None" = None):
+        super().__init__(message)
+        self.result = result
+
+
+@dataclass
+class SimulationResult:
+    """Time history, Poincare samples, event log and counters of one run.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+        Recorded times in s (the first is the start of the recorded window).
+    y : ndarray, shape (n, n_state)
+        Recorded states, SI units, columns named by ``state_names``.
+    mode : ndarray of int, shape (n,)
+        Mode index at each recorded time (``mode_names[mode]``).
+    poincare_t, poincare : ndarray
+        States at ``t = k T`` for every recorded period (the Poincare section).
+    events : dict of str to ndarray
+        ``t``, ``guard`` (name), ``from``, ``to`` (mode names) of every logged event
+        in the recorded window (at most ``max_log``; ``counters["events_logged"]``
+        counts all).
+    counters : dict of str to int
+        ``steps``, ``events``, ``bisections``, ``rhs_evaluations``, ...
+    params : dict of str to float
+        Every parameter value used.
+    period : float
+        The excitation period ``T`` in s.
+    status : int
+        0 done, 1 non-finite state, 2 event storm.
+    message : str
+    """
+
+    t: np.ndarray
+    y: np.ndarray
+    mode: np.ndarray
+    poincare_t: np.ndarray
+    poincare: np.ndarray
+    events: dict
+    counters: dict
+    state_names: list
+    mode_names: list
+    params: dict
+    period: float
+    steps_per_period: int
+    final_state: np.ndarray
+    final_mode: int
+    status: int = 0
+    message: str = "done"
+    length_scale: float | None = None
+    settings: dict = field(default_factory=dict)
+
+    def index(self, name: str) -> int:
+        """Column of state ``name`` (``"x1"``, ``"vx1"``, ``"z"``)."""
+        try:
+            return self.state_names.index(name)
+        except ValueError:
+            raise KeyError(f"no state {name!r}; states are {self.state_names}") from None
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        """Recorded history of state ``name``."""
+        return self.y[:, self.index(name)]
+
+    @property
+    def final(self) -> dict:
+        """Final state by name, SI units."""
+        return dict(zip(self.state_names, map(float, self.final_state)))
+
+    @property
+    def success(self) -> bool:
+        return self.status == 0

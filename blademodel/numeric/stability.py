@@ -1,0 +1,67 @@
+"""RK4's stability limit from the stiffest mode of a model."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+class StepTooLargeError(ValueError):
+    """The requested step lies outside RK4's stability region for some mode."""
+
+
+def rk4_amplification(z: np.ndarray) -> np.ndarray:
+    """RK4's stability polynomial ``R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24``."""
+    return 1 + z + z ** 2 / 2 + z ** 3 / 6 + z ** 4 / 24
+
+
+def _ray_limit(lam: complex) -> float:
+    """Largest ``h`` with ``|R(h lam)| <= 1`` along the ray of ``lam``."""
+    if abs(lam) == 0.0:
+        return math.inf
+    lo, hi = 0.0, 4.0 / abs(lam)  # the region lies within |z| < 3
+    if abs(rk4_amplification(hi * lam)) <= 1.0:
+        return math.inf  # only for Re(lam) > 0 would this fail: growth is then physical
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if abs(rk4_amplification(mid * lam)) <= 1.0 + 1e-12:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def max_stable_step(jacobian, n_modes: int, p: np.ndarray, n_state: int) -> tuple[float, int]:
+    """Largest stable RK4 step over every mode, and the mode that sets it.
+
+    Parameters
+    ----------
+    jacobian : callable
+        ``jacobian(mode, p)``: the state Jacobian of ``mode``.
+    n_modes : int
+    p : ndarray
+        Raw parameter vector.
+    n_state : int
+        Number of physical states (the Jacobian's size).
+    """
+    best, which = math.inf, -1
+    for mode in range(n_modes):
+        J = jacobian(mode, p)[:n_state, :n_state]
+        for lam in np.linalg.eigvals(J):
+            if lam.real > 1e-9 * max(abs(lam), 1.0):
+                continue  # an unstable physical mode: no step makes it decay
+            h = _ray_limit(complex(lam))
+            if h < best:
+                best, which = h, mode
+    return best, which
+
+
+def check_step(period: float, steps_per_period: int, h_max: float, mode_name: str) -> None:
+    """Raise :class:`StepTooLargeError` if ``period / steps_per_period > h_max``."""
+    h = period / steps_per_period
+    if h > h_max:
+        need = math.ceil(period / h_max)
+        raise StepTooLargeError(
+            f"steps_per_period = {steps_per_period} gives h = {h:.3e} s, above RK4's stability "
+            f"limit {h_max:.3e} s set by mode '{mode_name}'; use steps_per_period >= {need}")
