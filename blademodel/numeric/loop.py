@@ -77,10 +77,14 @@ def initial_mode(t, y, p, g, ytmp):
     return mode
 
 
-def integrate(y, mode, p, period, steps_per_period, n_transient, n_record, record_every,
-              event_tol, max_events, rec_t, rec_y, rec_mode, poincare, log_t, log_guard,
-              log_from, log_to, counters):
-    """Integrate ``n_transient + n_record`` excitation periods from ``t = 0``.
+def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_transient,
+              record_every, event_tol, max_events, rec_t, rec_y, rec_mode, poincare, log_t,
+              log_guard, log_from, log_to, counters):
+    """Integrate excitation periods ``start_period`` to ``end_period`` (exclusive).
+
+    Periods before ``n_transient`` are not recorded. A run may be split into calls
+    over consecutive period ranges: the record and log positions live in
+    ``counters``, so the pieces fill the same arrays as one call would.
 
     The step is ``h = period / steps_per_period``, so ``t = n * period`` falls on
     step ends (the Poincare section). After each (sub)step every guard of the
@@ -106,10 +110,10 @@ def integrate(y, mode, p, period, steps_per_period, n_transient, n_record, recor
     g1 = np.empty(ng)
     gm = np.empty(ng)
     max_log = log_t.shape[0]
-    t = 0.0
-    irec = 0
+    t = period * start_period
+    irec = counters[C_RECORDS]
     g0_valid = False
-    for per in range(n_transient + n_record):
+    for per in range(start_period, end_period):
         recording = per >= n_transient
         if recording and per == n_transient and irec < rec_t.shape[0]:
             rec_t[irec] = t
@@ -170,10 +174,12 @@ def integrate(y, mode, p, period, steps_per_period, n_transient, n_record, recor
                 mode = new_mode
                 n_events += 1
                 if n_events > max_events:
+                    counters[C_RECORDS] = irec
                     return STATUS_EVENT_STORM, mode, t
             counters[C_STEPS] += 1
             for i in range(n):
                 if not math.isfinite(y[i]):
+                    counters[C_RECORDS] = irec
                     return STATUS_NONFINITE, mode, t
             if recording and (j + 1) % record_every == 0 and irec < rec_t.shape[0]:
                 rec_t[irec] = t

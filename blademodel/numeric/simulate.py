@@ -27,7 +27,8 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
              event_tol: float = 1e-10, record_every: int = 1, max_events_per_step: int = 100,
              max_log: int = 200_000, energy: bool = False, y0=None, period: float | None = None,
              check_stability: bool = True, raise_on_error: bool = True,
-             length_scale: float | None = None) -> SimulationResult:
+             length_scale: float | None = None, progress=None, chunk_periods: int = 50,
+             mode0: int | None = None) -> SimulationResult:
     """Integrate ``model`` from rest with fixed-step RK4 and located events.
 
     Parameters
@@ -61,6 +62,12 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
         otherwise return the partial result with ``status`` and ``message``.
     length_scale : float, optional
         Scale for non-dimensional outputs (``X1 = x1 / length_scale``).
+    progress : callable, optional
+        ``progress(done_periods, total_periods)``, called after every chunk of
+        ``chunk_periods`` periods (the run is split without changing its result).
+    mode0 : int, optional
+        Initial mode; by default it follows from ``y0`` (every contact with
+        ``delta >= 0`` closed, the friction law choosing how).
 
     Returns
     -------
@@ -96,7 +103,7 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
             y[: y0.size] = y0
     ytmp = np.empty(n)
     g = np.empty(mod.GUARD_DIR.shape[1] + 1)
-    mode = int(mod.initial_mode(0.0, y, pp, g, ytmp))
+    mode = int(mod.initial_mode(0.0, y, pp, g, ytmp)) if mode0 is None else int(mode0)
 
     n_rec = (periods * steps_per_period) // record_every + 1
     rec_t = np.empty(n_rec)
@@ -108,11 +115,19 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
     log_from = np.empty(max_log, dtype=np.int64)
     log_to = np.empty(max_log, dtype=np.int64)
     counters = np.zeros(6, dtype=np.int64)
-    status, mode, t_stop = mod.integrate(y, mode, pp, T, int(steps_per_period), int(transient), int(periods),
-                                         int(record_every), float(event_tol), int(max_events_per_step),
-                                         rec_t, rec_y, rec_mode, poincare, log_t, log_guard, log_from,
-                                         log_to, counters)
-    nr = int(counters[5]) if status == 0 else int(np.searchsorted(rec_t[: n_rec], t_stop))
+    total = transient + periods
+    step = total if progress is None else max(1, int(chunk_periods))
+    start, status, t_stop = 0, 0, 0.0
+    while start < total and status == 0:
+        end = min(total, start + step)
+        status, mode, t_stop = mod.integrate(y, mode, pp, T, int(steps_per_period), start, end, int(transient),
+                                             int(record_every), float(event_tol), int(max_events_per_step),
+                                             rec_t, rec_y, rec_mode, poincare, log_t, log_guard, log_from,
+                                             log_to, counters)
+        start = end
+        if progress is not None:
+            progress(start, total)
+    nr = int(counters[5])
     nl = min(int(counters[4]), max_log)
     modes, guards = meta["modes"], meta["guards"]
     events = {"t": log_t[:nl].copy(),
