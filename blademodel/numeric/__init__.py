@@ -2,8 +2,9 @@
 
 from .compiled import CompiledSystem, compile_model
 from .result import SimulationError, SimulationResult
-from .simulate import excitation_period, simulate
+from .integrator import HybridIntegrator, excitation_period
+from .simulate import simulate
 from .stability import StepTooLargeError
 
-__all__ = ["simulate", "compile_model", "CompiledSystem", "SimulationResult", "SimulationError",
+__all__ = ["simulate", "HybridIntegrator", "compile_model", "CompiledSystem", "SimulationResult", "SimulationError",
            "StepTooLargeError", "excitation_period"]

@@ -7,20 +7,10 @@ import math
 import numpy as np
 
 from ..model import Model
-from .compiled import compile_model
+from .integrator import HybridIntegrator, excitation_period  # noqa: F401  (re-exported)
 from .result import SimulationError, SimulationResult
-from .stability import check_step, max_stable_step
 
 _COUNTERS = ("steps", "events", "bisections", "rhs_evaluations", "events_logged", "records")
-
-
-def excitation_period(model: Model) -> float:
-    """``2 pi / omega`` of the model's harmonic forces (they must share ``omega``)."""
-    omegas = {f.parameters()["omega"].value for f in model.forces}
-    if len(omegas) != 1:
-        raise ValueError(f"the forces have {len(omegas)} distinct frequencies {sorted(omegas)}; "
-                         "give the period explicitly")
-    return 2 * math.pi / omegas.pop()
 
 
 def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_period: int = 1000,
@@ -73,37 +63,15 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
     -------
     SimulationResult
     """
-    for name, value, lo in (("periods", periods, 1), ("transient", transient, 0),
-                            ("steps_per_period", steps_per_period, 1), ("record_every", record_every, 1),
-                            ("max_events_per_step", max_events_per_step, 1)):
+    for name, value, lo in (("periods", periods, 1), ("transient", transient, 0), ("record_every", record_every, 1)):
         if int(value) != value or value < lo:
             raise ValueError(f"{name} = {value!r} must be an integer >= {lo}")
-    if not (event_tol > 0 and math.isfinite(event_tol)):
-        raise ValueError(f"event_tol = {event_tol!r} must be a positive number")
-    T = excitation_period(model) if period is None else float(period)
-    compiled = compile_model(model, energy=energy)
-    mod, meta = compiled.module, compiled.meta
-    p_raw = np.array([model.parameters[n] for n in meta["params"]], dtype=float)
-    pp = mod.derived(p_raw)
-    n_phys = len(meta["state"]) - (3 if energy else 0)
-    if check_stability:
-        h_max, which = max_stable_step(mod.jacobian, len(meta["modes"]), p_raw, n_phys)
-        check_step(T, steps_per_period, h_max, meta["modes"][which] if which >= 0 else "-")
-
-    n = meta["n_state"]
-    y = np.zeros(n)
-    if y0 is not None:
-        if isinstance(y0, dict):
-            for k, v in y0.items():
-                if k not in meta["state"]:
-                    raise KeyError(f"y0 names unknown state {k!r}; states are {meta['state']}")
-                y[meta["state"].index(k)] = v
-        else:
-            y0 = np.asarray(y0, dtype=float)
-            y[: y0.size] = y0
-    ytmp = np.empty(n)
-    g = np.empty(mod.GUARD_DIR.shape[1] + 1)
-    mode = int(mod.initial_mode(0.0, y, pp, g, ytmp)) if mode0 is None else int(mode0)
+    integ = HybridIntegrator(model, steps_per_period=steps_per_period, event_tol=event_tol,
+                             max_events_per_step=max_events_per_step, energy=energy, period=period,
+                             check_stability=check_stability)
+    T, n, meta = integ.period, integ.n_state, integ.meta
+    y = integ.initial_state(y0)
+    mode = integ.mode_of(y) if mode0 is None else int(mode0)
 
     n_rec = (periods * steps_per_period) // record_every + 1
     rec_t = np.empty(n_rec)
@@ -120,10 +88,10 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
     start, status, t_stop = 0, 0, 0.0
     while start < total and status == 0:
         end = min(total, start + step)
-        status, mode, t_stop = mod.integrate(y, mode, pp, T, int(steps_per_period), start, end, int(transient),
-                                             int(record_every), float(event_tol), int(max_events_per_step),
-                                             rec_t, rec_y, rec_mode, poincare, log_t, log_guard, log_from,
-                                             log_to, counters)
+        status, mode, t_stop = integ.advance(y, mode, start, end, n_transient=transient,
+                                             record=(rec_t, rec_y, rec_mode), poincare=poincare,
+                                             log=(log_t, log_guard, log_from, log_to), counters=counters,
+                                             record_every=record_every)
         start = end
         if progress is not None:
             progress(start, total)

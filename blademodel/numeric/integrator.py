@@ -1,0 +1,148 @@
+"""A model's compiled integrator, set up once and advanced many times."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..model import Model
+from .compiled import compile_model
+from .stability import check_step, max_stable_step
+
+STATUS_MESSAGES = {0: "done", 1: "non-finite state", 2: "event storm"}
+
+
+def excitation_period(model: Model) -> float:
+    """``2 pi / omega`` of the model's harmonic forces (they must share ``omega``)."""
+    omegas = {f.parameters()["omega"].value for f in model.forces}
+    if len(omegas) != 1:
+        raise ValueError(f"the forces have {len(omegas)} distinct frequencies {sorted(omegas)}; "
+                         "give the period explicitly")
+    return 2 * math.pi / omegas.pop()
+
+
+class HybridIntegrator:
+    """Fixed-step RK4 with located events for one model and one set of settings.
+
+    Construction compiles (or loads) the kernel, evaluates the parameter array and
+    checks the step against RK4's stability limit; :meth:`advance` then integrates
+    whole excitation periods with no set-up cost.
+
+    Parameters
+    ----------
+    model : Model
+    steps_per_period : int
+        ``h = T / steps_per_period``.
+    event_tol : float
+        Events are bracketed to ``event_tol * h`` by bisection; ``>= 1`` switches
+        at the end of the step instead (no location, first order; for comparison).
+    max_events_per_step : int
+        Cap on events in one step (an event storm stops the run).
+    energy : bool
+        Integrate the work and dissipation accumulators too.
+    period : float, optional
+        Excitation period; by default from the model's forces.
+    check_stability : bool
+        Refuse a step above RK4's stability limit (:class:`StepTooLargeError`).
+    """
+
+    def __init__(self, model: Model, *, steps_per_period: int = 1000, event_tol: float = 1e-10,
+                 max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
+                 check_stability: bool = True):
+        for name, value in (("steps_per_period", steps_per_period), ("max_events_per_step", max_events_per_step)):
+            if int(value) != value or value < 1:
+                raise ValueError(f"{name} = {value!r} must be an integer >= 1")
+        if not (event_tol > 0 and math.isfinite(event_tol)):
+            raise ValueError(f"event_tol = {event_tol!r} must be a positive number")
+        self.model = model
+        self.period = excitation_period(model) if period is None else float(period)
+        self.steps_per_period = int(steps_per_period)
+        self.event_tol = float(event_tol)
+        self.max_events_per_step = int(max_events_per_step)
+        self.compiled = compile_model(model, energy=energy)
+        self.module, self.meta = self.compiled.module, self.compiled.meta
+        self.p_raw = np.array([model.parameters[n] for n in self.meta["params"]], dtype=float)
+        self.p = self.module.derived(self.p_raw)
+        self.n_state = self.meta["n_state"]
+        self.n_physical = self.n_state - (3 if energy else 0)
+        if check_stability:
+            h_max, which = max_stable_step(self.module.jacobian, len(self.meta["modes"]), self.p_raw,
+                                           self.n_physical)
+            check_step(self.period, self.steps_per_period, h_max,
+                       self.meta["modes"][which] if which >= 0 else "-")
+        self._g = np.empty(self.module.GUARD_DIR.shape[1] + 1)
+        self._ytmp = np.empty(self.n_state)
+        self._empty_rec = (np.empty(0), np.empty((0, self.n_state)), np.empty(0, dtype=np.int64))
+        self._empty_log = (np.empty(0), np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64),
+                           np.empty(0, dtype=np.int64))
+
+    @property
+    def state_names(self) -> list[str]:
+        return list(self.meta["state"])
+
+    @property
+    def mode_names(self) -> list[str]:
+        return list(self.meta["modes"])
+
+    def initial_state(self, y0=None) -> np.ndarray:
+        """State vector from ``y0`` (array or ``{name: value}``); default rest."""
+        y = np.zeros(self.n_state)
+        if y0 is None:
+            return y
+        if isinstance(y0, dict):
+            for k, v in y0.items():
+                if k not in self.meta["state"]:
+                    raise KeyError(f"y0 names unknown state {k!r}; states are {self.meta['state']}")
+                y[self.meta["state"].index(k)] = v
+        else:
+            y0 = np.asarray(y0, dtype=float)
+            y[: y0.size] = y0
+        return y
+
+    def mode_of(self, y: np.ndarray, t: float = 0.0) -> int:
+        """The mode a state belongs to (closed contacts where ``delta >= 0``).
+
+        May apply the entry resets of the friction laws to ``y`` (a Jenkins
+        stretch, a stick projection), in place.
+        """
+        return int(self.module.initial_mode(t, y, self.p, self._g, self._ytmp))
+
+    def advance(self, y: np.ndarray, mode: int, start_period: int, end_period: int, *,
+                n_transient: int | None = None, record=None, poincare=None, log=None,
+                counters=None, record_every: int = 1) -> tuple[int, int, float]:
+        """Integrate periods ``start_period`` to ``end_period``; ``y`` is updated in place.
+
+        Parameters
+        ----------
+        y : ndarray
+        mode : int
+        start_period, end_period : int
+            Time runs from ``start_period * T`` to ``end_period * T``.
+        n_transient : int, optional
+            Periods before this one are not recorded (default: ``start_period``).
+        record : tuple of arrays, optional
+            ``(t, y, mode)`` arrays to fill with states every ``record_every`` steps.
+        poincare : ndarray, optional
+            Filled with the state at the end of each recorded period.
+        log : tuple of arrays, optional
+            ``(t, guard, from, to)`` arrays for the event log.
+        counters : ndarray of int64, optional
+            Accumulates steps, events, bisections, rhs evaluations, log and record
+            positions; pass the same array to consecutive calls.
+
+        Returns
+        -------
+        status, mode, t : int, int, float
+        """
+        if counters is None:
+            counters = np.zeros(6, dtype=np.int64)
+        rec_t, rec_y, rec_mode = record if record is not None else self._empty_rec
+        log_t, log_g, log_f, log_to = log if log is not None else self._empty_log
+        if poincare is None:
+            poincare = np.empty((max(end_period - (n_transient or start_period), 0), self.n_state))
+        status, mode, t = self.module.integrate(
+            y, int(mode), self.p, self.period, self.steps_per_period, int(start_period), int(end_period),
+            int(start_period if n_transient is None else n_transient), int(record_every), self.event_tol,
+            self.max_events_per_step, rec_t, rec_y, rec_mode, poincare, log_t, log_g, log_f, log_to, counters)
+        return int(status), int(mode), float(t)
