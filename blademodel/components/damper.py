@@ -33,6 +33,8 @@ class Damper:
     _c: Param = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
+        if self.b == self.a:
+            raise ValueError(f"{type(self).__name__.lower()} joins {self.a!r} to itself")
         tag = self.a if self.b is None else f"{self.a}_{self.b}"
         object.__setattr__(self, "_c", as_param(self.c, f"c_{tag}", field=f"damper on {tag}: c", minimum=0.0))
 
