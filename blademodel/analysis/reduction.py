@@ -5,17 +5,22 @@ from __future__ import annotations
 import numpy as np
 
 
-def mean_square(result, names=("x1", "y1")) -> float:
-    """Time mean of the sum of squares of states ``names`` over the recorded periods.
+def mean_square(states, state_names, names=("x1", "y1")) -> float:
+    """Time mean of the sum of squares of states ``names`` over whole periods.
 
-    The records must cover whole periods at every step; the closing sample (equal in
-    phase to the first) is left out, which makes the mean exact for periodic motion
-    up to the integration error.
+    Parameters
+    ----------
+    states : ndarray, shape (K * S + 1, n)
+        States recorded at every step over ``K`` whole periods, both ends included
+        (``result.y`` of a run with ``record_every=1``). The closing sample, equal
+        in phase to the first, is left out: the mean is then exact for a periodic
+        motion up to the integration error.
+    state_names : list of str
+    names : tuple of str
+        States summed (MODEL.md §7: ``x1`` and ``y1``).
     """
-    y = np.asarray(sum(result[n] ** 2 for n in names))
-    if result.settings.get("record_every", 1) != 1:
-        raise ValueError("mean_square needs a result recorded at every step (record_every=1)")
-    return float(np.mean(y[1:]))
+    cols = [list(state_names).index(n) for n in names]
+    return float(np.mean(np.sum(np.asarray(states)[1:, cols] ** 2, axis=1)))
 
 
 def vibration_reduction(P: float, P0: float) -> float:

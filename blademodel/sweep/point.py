@@ -1,0 +1,129 @@
+"""One point of a sweep: integrate, analyse, return plain arrays (picklable)."""
+
+from __future__ import annotations
+
+import traceback
+
+import numpy as np
+
+from ..analysis import classify_motion, largest_lyapunov, mean_square, poincare_period, vibration_reduction
+from ..config import apply_overrides, config_from_data
+from ..numeric import HybridIntegrator
+
+#: Motion codes stored in result files.
+MOTION_CODES = {"nonperiodic": 0, "quasi-periodic": -1, "chaos": -2}
+
+
+def motion_code(label: str) -> int:
+    """``"P3"`` -> 3; ``"chaos"`` -> -2; ``"quasi-periodic"`` -> -1; ``"nonperiodic"`` -> 0."""
+    return int(label[1:]) if label.startswith("P") else MOTION_CODES[label]
+
+
+def motion_label(code: int) -> str:
+    """Inverse of :func:`motion_code`."""
+    return f"P{code}" if code > 0 else {v: k for k, v in MOTION_CODES.items()}[int(code)]
+
+
+def build_config(base: dict, overrides: dict):
+    """The validated config of a point: ``base`` with ``overrides`` applied."""
+    return apply_overrides(config_from_data(dict(base), source="study base"), overrides, source="sweep")
+
+
+def _length_scale(cfg, model) -> float:
+    gap = getattr(cfg, "gap", None)
+    if gap is None and model.contacts:
+        gap = model.contacts[0].parameters()["gap"].value
+    return float(gap) if gap else float("nan")
+
+
+_P0_MEMO: dict = {}
+
+
+def _reference_mean_square(cfg, run: dict) -> float:
+    """``P0``: the same mean for the system without contact (memoised: a gap or gamma sweep shares it)."""
+    model0 = cfg.build(contact=False)
+    key = (model0.structure_key(), tuple(sorted(model0.parameters.items())), run["transient"], run["periods"],
+           run["steps_per_period"])
+    if key not in _P0_MEMO:
+        free = HybridIntegrator(model0, steps_per_period=run["steps_per_period"], event_tol=run["event_tol"])
+        n = run["periods"] * free.steps_per_period + 1
+        rec = (np.empty(n), np.empty((n, free.n_state)), np.empty(n, dtype=np.int64))
+        y = free.initial_state()
+        status, _, _ = free.advance(y, free.mode_of(y), 0, run["transient"] + run["periods"],
+                                    n_transient=run["transient"], record=rec)
+        if status:
+            raise RuntimeError("the contact-free reference run failed")
+        _P0_MEMO[key] = mean_square(rec[1], free.state_names)
+    return _P0_MEMO[key]
+
+
+def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
+    """Integrate one point from rest (or ``y0``) and analyse it.
+
+    Parameters
+    ----------
+    base : dict
+        Base model config data.
+    overrides : dict
+        Swept field values of this point (dotted names).
+    run : dict
+        :class:`~blademodel.sweep.spec.RunSettings` as a dict.
+    y0 : ndarray, optional
+        Warm start state.
+
+    Returns
+    -------
+    dict
+        ``poincare_x1``, ``poincare_vx1`` (SI, one per recorded period),
+        ``length_scale``, ``period``, ``motion`` (code), ``lyapunov`` (1/period),
+        ``P``, ``P0``, ``Pd`` (percent), ``events``, ``final_state`` and, if asked,
+        ``history_t``, ``history_x1``, ``history_vx1``; on failure only ``error``.
+    """
+    try:
+        cfg = build_config(base, overrides)
+        model = cfg.build()
+        integ = HybridIntegrator(model, steps_per_period=run["steps_per_period"], event_tol=run["event_tol"])
+        T, S = integ.period, integ.steps_per_period
+        transient, periods = run["transient"], run["periods"]
+        y = integ.initial_state(y0)
+        mode = integ.mode_of(y)
+        hist = min(run.get("history_periods", 0), periods)
+        want_pd = bool(run.get("vibration_reduction"))
+        keep = periods if want_pd else hist  # periods recorded at every step
+        n_rec = keep * S + 1 if keep else 0
+        rec = (np.empty(n_rec), np.empty((n_rec, integ.n_state)), np.empty(n_rec, dtype=np.int64))
+        poinc = np.empty((periods, integ.n_state))
+        counters = np.zeros(6, dtype=np.int64)
+        status, mode, t = integ.advance(y, mode, 0, transient, counters=counters)
+        if not status:
+            status, mode, t = integ.advance(y, mode, transient, transient + periods, poincare=poinc,
+                                            counters=counters,
+                                            n_transient=transient, record=rec if keep else None)
+        if status:
+            raise RuntimeError(f"integration failed at t = {t:.6g} s ({['', 'non-finite state', 'event storm'][status]})")
+        names = integ.state_names
+        ix, iv = names.index("x1") if "x1" in names else 0, names.index("vx1") if "vx1" in names else 0
+        n_phys = len(model.coordinates) * 2
+        scale_len = _length_scale(cfg, model)
+        out = {"poincare_x1": poinc[:, ix].copy(), "poincare_vx1": poinc[:, iv].copy(),
+               "length_scale": scale_len, "period": poincare_period(poinc[:, :n_phys]),
+               "events": int(counters[1]), "final_state": y.copy()}
+        lam = float("nan")
+        if run.get("lyapunov_periods", 0):
+            ref = abs(scale_len) if np.isfinite(scale_len) and scale_len else max(np.max(np.abs(poinc[:, 0])), 1e-12)
+            omega = 2 * np.pi / T
+            sc = [ref] * (n_phys // 2) + [ref * omega] * (n_phys // 2) + [ref] * (integ.n_physical - n_phys)
+            lam = largest_lyapunov(integ, y, mode, start_period=transient + periods,
+                                   periods=run["lyapunov_periods"], scale=sc)
+        out["lyapunov"] = lam
+        out["motion"] = motion_code(classify_motion(poinc[:, :n_phys], lam if run.get("lyapunov_periods") else None))
+        if hist:
+            tail = slice(n_rec - (hist * S + 1), n_rec)
+            out.update(history_t=rec[0][tail].copy(), history_x1=rec[1][tail, ix].copy(),
+                       history_vx1=rec[1][tail, iv].copy())
+        if want_pd:
+            P, P0 = mean_square(rec[1], names), _reference_mean_square(cfg, run)
+            out.update(P=P, P0=P0, Pd=vibration_reduction(P, P0))
+        return out
+    except Exception as e:  # a failed point is recorded, the sweep goes on
+        return {"error": f"{type(e).__name__}: {e}", "traceback": traceback.format_exc(limit=3)}

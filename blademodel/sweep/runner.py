@@ -1,0 +1,118 @@
+"""Run a study into a result file: grid, executor, incremental storage, resume."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import sys
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from . import storage
+from .executors import choose
+from .point import build_config, run_point
+from .spec import Study
+
+
+def points(study: Study) -> tuple[list[str], list[list[float]], list[str], list[dict]]:
+    """The study's points: field names, their values per point, laws, and overrides.
+
+    Laws vary slowest, then the first swept field, then the second (row-major),
+    so a 2-D map reshapes to ``(law, field1, field2)``.
+    """
+    laws = study.laws or [study.base.get("friction", "coulomb")]
+    if study.cases:
+        fields = sorted({k for c in study.cases for k in c})
+        combos = [[float(c.get(f, np.nan)) for f in fields] for c in study.cases]
+    else:
+        fields = list(study.sweep)
+        combos = [list(v) for v in itertools.product(*(study.sweep[f].grid() for f in fields))]
+    values, law_of, overrides = [], [], []
+    for law in laws:
+        for combo in combos:
+            over = {f: v for f, v in zip(fields, combo) if not np.isnan(v)}
+            if study.laws:
+                over["friction"] = law
+            values.append(combo)
+            law_of.append(law)
+            overrides.append(over)
+    return fields, values, law_of, overrides
+
+
+def _bar(done: int, total: int) -> None:
+    if sys.stderr.isatty():
+        bar = "#" * int(30 * done / max(total, 1))
+        print(f"\r[{bar:<30}] {done}/{total} points", end="" if done < total else "\n", file=sys.stderr)
+
+
+def run_study(study: Study, out: str | Path, *, workers: int | None = None, scheduler: str | None = None,
+              restart: bool = False, progress: Callable[[int, int], None] | None = _bar) -> Path:
+    """Run every pending point of ``study`` into the NetCDF file ``out``.
+
+    Parameters
+    ----------
+    study : Study
+    out : path
+        Result file; if it exists and holds the same study, only the points not
+        yet done are run (resume).
+    workers : int, optional
+        Processes (default all cores; 1 runs in this process).
+    scheduler : str, optional
+        Address of a Dask distributed scheduler to run the points on.
+    restart : bool
+        Discard an existing file and start again.
+    progress : callable, optional
+        ``progress(done, total)`` after every point.
+
+    Returns
+    -------
+    Path
+        ``out``.
+    """
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    study_json = study.model_dump_json()
+    fields, values, laws, overrides = points(study)
+    run = study.run.model_dump()
+    # Validate the base config once, here, so a bad study fails before any work.
+    n_state = 0
+    for law in sorted(set(laws)):
+        model = build_config(study.base, overrides[laws.index(law)]).build()
+        n_state = max(n_state, len(model.coordinates) * 2 + sum(len(c.friction.states) for c in model.contacts))
+    if restart and out.exists():
+        out.unlink()
+    if not out.exists():
+        storage.create(out, study_json=study_json, fields=fields, values=values, laws=laws,
+                       periods=run["periods"], n_state=n_state,
+                       history=run["history_periods"] * run["steps_per_period"] + 1 if run["history_periods"] else 0)
+    todo = storage.pending(out, study_json)
+    total, done = len(values), len(values) - len(todo)
+    if progress:
+        progress(done, total)
+    if run["warm_start"]:
+        # Each point starts where the previous one (same law) ended: a chain, so serial.
+        for i in todo:
+            prev = storage.final_state(out, i - 1) if i > 0 and laws[i - 1] == laws[i] else None
+            storage.write_point(out, i, run_point(study.base, overrides[i], run, y0=prev))
+            done += 1
+            if progress:
+                progress(done, total)
+        return out
+    tasks = [(i, study.base, overrides[i], run) for i in todo]
+    for i, result in choose(workers, scheduler)(tasks):
+        storage.write_point(out, i, result)
+        done += 1
+        if progress:
+            progress(done, total)
+    return out
+
+
+def open_result(path: str | Path):
+    """The result file as an :class:`xarray.Dataset`, with the study in ``attrs``."""
+    import xarray as xr
+    ds = xr.load_dataset(path)
+    ds.attrs["study"] = json.loads(ds.attrs["study"])
+    ds.attrs["fields"] = json.loads(ds.attrs["fields"])
+    return ds

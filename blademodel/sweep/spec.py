@@ -1,0 +1,119 @@
+"""A study: a base model, the swept fields, run settings and what to plot."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal, Optional
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+class Axis(_Strict):
+    """Values of one swept field: ``values``, or ``start``/``stop``/``num`` (``log`` spacing)."""
+
+    start: Optional[float] = None
+    stop: Optional[float] = None
+    num: Optional[int] = Field(None, ge=1)
+    log: bool = False
+    values: Optional[list[float]] = None
+
+    @model_validator(mode="after")
+    def _check(self):
+        if self.values is None and None in (self.start, self.stop, self.num):
+            raise ValueError("give either values or start, stop and num")
+        if self.log and self.values is None and (self.start <= 0 or self.stop <= 0):
+            raise ValueError(f"log spacing needs positive start and stop, got {self.start}, {self.stop}")
+        return self
+
+    def grid(self, num: int | None = None) -> np.ndarray:
+        """The values, or ``num`` of them when given (a coarse version)."""
+        if self.values is not None:
+            v = np.asarray(self.values, dtype=float)
+            if num is not None and num < len(v):
+                v = v[np.unique(np.linspace(0, len(v) - 1, num).round().astype(int))]
+            return v
+        n = self.num if num is None else min(num, self.num)
+        return np.geomspace(self.start, self.stop, n) if self.log else np.linspace(self.start, self.stop, n)
+
+
+class RunSettings(_Strict):
+    """How each point is integrated and analysed."""
+
+    transient: int = Field(300, ge=0, description="periods discarded")
+    periods: int = Field(100, ge=2, description="periods recorded (Poincare samples)")
+    steps_per_period: int = Field(1000, ge=10)
+    event_tol: float = Field(1e-10, gt=0)
+    lyapunov_periods: int = Field(0, ge=0, description="periods for the largest Lyapunov exponent (0: skip)")
+    vibration_reduction: bool = Field(False, description="compute P_d against the contact-free system")
+    warm_start: bool = Field(False, description="start each point from the previous point's final state")
+    history_periods: int = Field(0, ge=0, description="last periods kept as a time history (case figures)")
+
+
+class Study(_Strict):
+    """One study: a paper figure or a user's own sweep.
+
+    Attributes
+    ----------
+    name : str
+    title : str
+    base : dict
+        The base model config (``blade_pair`` or ``components`` format) or
+        ``{"file": "path.yaml"}`` relative to the study file.
+    sweep : dict of str to Axis
+        One or two swept config fields (nested names with dots).
+    laws : list of str, optional
+        Friction laws to run (an extra ``law`` dimension); default: the base's.
+    cases : list of dict
+        Single points to show as four-panel case figures instead of a sweep.
+    plot : str
+        ``bifurcation``, ``reduction``, ``map`` or ``cases``.
+    quick : dict
+        Overrides for ``--quick`` (``num``, ``transient``, ``periods``).
+    """
+
+    name: str
+    title: str = ""
+    paper: str = Field("", description="what the paper reports for this figure")
+    base: dict = Field(default_factory=dict)
+    sweep: dict[str, Axis] = Field(default_factory=dict)
+    laws: Optional[list[Literal["coulomb", "bilinear", "none"]]] = None
+    cases: list[dict] = Field(default_factory=list)
+    run: RunSettings = Field(default_factory=RunSettings)
+    plot: Literal["bifurcation", "reduction", "map", "cases"] = "bifurcation"
+    quick: dict = Field(default_factory=lambda: {"num": 8, "transient": 40, "periods": 16})
+    source: Optional[str] = Field(None, exclude=True)
+
+    @model_validator(mode="after")
+    def _check(self):
+        if not self.sweep and not self.cases:
+            raise ValueError("a study needs a sweep or cases")
+        if len(self.sweep) > 2:
+            raise ValueError(f"sweep over at most two fields, got {list(self.sweep)}")
+        return self
+
+    def quick_version(self) -> "Study":
+        """The coarse version for smoke tests (fewer points and periods)."""
+        q = dict(self.quick)
+        num = q.pop("num", 8)
+        run = self.run.model_copy(update={k: v for k, v in q.items() if k in RunSettings.model_fields})
+        if run.lyapunov_periods:
+            run = run.model_copy(update={"lyapunov_periods": min(run.lyapunov_periods, run.periods)})
+        sweep = {k: Axis(values=list(a.grid(num))) for k, a in self.sweep.items()}
+        return self.model_copy(update={"sweep": sweep, "run": run})
+
+
+def load_study(path) -> Study:
+    """Read a study YAML file; ``base: {file: ...}`` is read relative to it."""
+    from ..config.loading import read_yaml, validate_file
+    path = Path(path)
+    study = validate_file(Study, path)
+    base = dict(study.base)
+    if "file" in base:
+        data, _ = read_yaml(path.parent / base.pop("file"))
+        base = {**data, **base}
+    return study.model_copy(update={"base": base, "source": str(path)})
