@@ -7,7 +7,7 @@ import json
 from dataclasses import dataclass
 from functools import cached_property
 
-from .components import Contact, Damper, HarmonicForce, Mass, Param, Spring
+from .components import Contact, Damper, HarmonicForce, Mass, Spring
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,7 +54,13 @@ class Model:
             for b in c.bodies:
                 if by_name.get(b.name) != b:
                     raise ValueError(f"contact {c.name} touches mass {b.name!r}, which is not in the model")
-        self.parameters  # raises on conflicting shared parameters
+        reserved = {"t", *coords, *(f"v{c}" for c in coords),
+                    *(st for c in self.contacts for st in c.friction.states),
+                    *(f"{st}_{c.name}" for c in self.contacts for st in c.friction.states),
+                    *(f"{x}_{c.name}" for c in self.contacts for x in ("f", "N"))}
+        clash = sorted(reserved & set(self.parameters))  # also raises on conflicting shared parameters
+        if clash:
+            raise ValueError(f"parameter name(s) {clash} clash with state, time or force symbols; rename them")
 
     @property
     def components(self) -> tuple:

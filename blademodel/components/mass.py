@@ -31,12 +31,17 @@ class Mass:
         Mass in kg, > 0. Default symbol ``m_<name>``.
     dofs : tuple of str
         Axes the mass moves along, a subset of ``("x", "y")``.
+    my : float or Param, optional
+        A different (modal) mass for the ``y`` DOF, > 0; default ``m``. Lumped
+        blade models often have different modal masses per direction.
     """
 
     name: str
     m: Number
     dofs: tuple[str, ...] = ("x", "y")
+    my: Number | None = None
     _m: Param = field(init=False, repr=False, compare=False)
+    _my: Param | None = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         if not str(self.name).isidentifier() and not str(self.name).isdigit():
@@ -48,6 +53,9 @@ class Mass:
         object.__setattr__(self, "dofs", dofs)
         object.__setattr__(self, "_m", as_param(self.m, f"m_{self.name}", field=f"mass {self.name}: m",
                                                 minimum=0.0, strict=True))
+        my = None if self.my is None else as_param(self.my, f"my_{self.name}", field=f"mass {self.name}: my",
+                                                   minimum=0.0, strict=True)
+        object.__setattr__(self, "_my", my)
 
     @property
     def coordinates(self) -> tuple[str, ...]:
@@ -60,4 +68,8 @@ class Mass:
 
     def parameters(self) -> dict[str, Param]:
         """Numeric parameters, by field name."""
-        return {"m": self._m}
+        return {"m": self._m} if self._my is None else {"m": self._m, "my": self._my}
+
+    def inertia(self, dof: str) -> Param:
+        """The mass that multiplies the acceleration of ``dof``."""
+        return self._my if dof == "y" and self._my is not None else self._m

@@ -62,9 +62,14 @@ def as_param(value: Number, default_name: str, *, field: str, minimum: float | N
     minimum : float, optional
         Lower bound; ``strict`` makes it exclusive.
     """
+    if not isinstance(value, Param):
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{field} = {value!r} is not a number") from None
+        if not math.isfinite(number):
+            raise ValueError(f"{field} = {value!r} is not finite")
     p = value if isinstance(value, Param) else Param(default_name, value)
-    if not math.isfinite(p.value):
-        raise ValueError(f"{field} = {p.value!r} is not finite")
     if minimum is not None:
         if strict and not p.value > minimum:
             raise ValueError(f"{field} = {p.value!r} must be > {minimum}")

@@ -55,6 +55,8 @@ class BladePair(_Strict):
     gamma_reference: Literal["kx", "ky"] = Field("kx", description="stiffness that gamma multiplies")
     stick: Literal["exact", "band"] = Field("exact", description="Coulomb stick treatment")
     stick_velocity_tol: float = Field(1e-4, gt=0, description="band half-width, m/s (stick='band')")
+    equations: Literal["derived", "eq11_as_printed"] = Field(
+        "derived", description="derived: the physical model; eq11_as_printed: the paper's Eq. 11 read literally")
     blade1: Optional[BladeValues] = None
     blade2: Optional[BladeValues] = None
 
@@ -62,6 +64,8 @@ class BladePair(_Strict):
     def _check(self):
         if self.stick == "band" and self.friction != "coulomb":
             raise ValueError(f"stick='band' applies to friction='coulomb' only, not {self.friction!r}")
+        if self.equations == "eq11_as_printed" and (self.blade1 or self.blade2):
+            raise ValueError("equations='eq11_as_printed' is defined for the symmetric pair (no blade1/blade2)")
         return self
 
     @property
@@ -70,9 +74,14 @@ class BladePair(_Strict):
         return self.gamma * (self.kx if self.gamma_reference == "kx" else self.ky)
 
     @property
+    def effective_omega(self) -> float:
+        """Excitation frequency of the integrated system (``sqrt(kx/m)`` for Eq. 11 as printed)."""
+        return math.sqrt(self.kx / self.m) if self.equations == "eq11_as_printed" else self.omega
+
+    @property
     def period(self) -> float:
-        """Excitation period ``2 pi / omega``."""
-        return 2 * math.pi / self.omega
+        """Excitation period ``2 pi / effective_omega``."""
+        return 2 * math.pi / self.effective_omega
 
     @property
     def length_scale(self) -> float:
@@ -106,12 +115,20 @@ class BladePair(_Strict):
             ``False`` drops the contact (the reference system of ``P_d``).
         """
         sym = {n: self._symbol(n) for n in ("m", "kx", "ky", "cx", "cy")}
-        masses = [Mass(str(i), sym["m"](i)) for i in (1, 2)]
+        omega, my, cy = Param("omega", self.omega), None, sym["cy"]
+        if self.equations == "eq11_as_printed":
+            # Eq. 11 as printed, X'' + 2 eps X' + X = ..., with ' = d/dtau, is the physical
+            # model in the time t' = tau / omega_x: driven at omega_x, with the axial
+            # modal mass m ky/kx and axial damping cy sqrt(ky/kx) (docs: nondimensional).
+            omega = Param("omega", self.effective_omega)
+            my = Param("my", self.m * self.ky / self.kx)
+            cy = lambda i: Param("cy", self.cy * math.sqrt(self.ky / self.kx))  # noqa: E731
+        masses = [Mass(str(i), sym["m"](i), my=my) for i in (1, 2)]
         springs, dampers, forces = [], [], []
         for i, b in zip((1, 2), masses):
             springs += [Spring(f"x{i}", sym["kx"](i)), Spring(f"y{i}", sym["ky"](i))]
-            dampers += [Damper(f"x{i}", sym["cx"](i)), Damper(f"y{i}", sym["cy"](i))]
-            forces.append(HarmonicForce(b, Param("F0", self.F0), Param("omega", self.omega),
+            dampers += [Damper(f"x{i}", sym["cx"](i)), Damper(f"y{i}", cy(i))]
+            forces.append(HarmonicForce(b, Param("F0", self.F0), omega,
                                         Param(f"phi{i}", getattr(self, f"phi{i}")), Param("beta", self.beta)))
         contacts = []
         if contact:

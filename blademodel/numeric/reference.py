@@ -38,17 +38,25 @@ Restart rule (guard against immediate re-triggering)
     ``solve_ivp`` in its first step. No event is ever skipped.
 
 Simultaneous events
-    ``solve_ivp`` terminates at the earliest root of all the mode's guards; if two
-    roots coincide to the last bit, the one SciPy sorts first is taken (the kernel
-    takes the lower guard index). This never happens in the built-in models
-    except at exactly symmetric instants.
+    ``solve_ivp`` terminates at the earliest root of all the mode's guards and
+    reports only that one; if two roots coincide to the last bit, the one SciPy
+    sorts first is taken, whereas the kernel takes the lower guard index. Exact
+    ties are not expected outside contrived initial states.
+
+Why the nudge matters
+    Without it (restarting at the root itself), the bilinear base case and the
+    bilinear case at zero gap leave the kernel's event sequence within five
+    periods: after a closing located at ``delta = -0``, the stick guards
+    ``mu N -+ kd z`` start at ``-0`` instead of ``+0``, and the immediate stick to
+    slip transition is missed. With the nudge every tested case follows the
+    kernel's event sequence event by event (``tests/test_reference.py``).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import Callable, Iterator, Sequence
 
 import numpy as np
 import sympy as sp
@@ -65,7 +73,10 @@ _LAMBDIFIED: dict = {}
 
 def _lambdify(args, expr):
     """Scalar (``math``-module) lambdified function of ``(t, y, p)``."""
-    return sp.lambdify(args, expr, modules="math", cse=True, docstring_limit=0)
+    try:
+        return sp.lambdify(args, expr, modules="math", cse=True, docstring_limit=0)
+    except TypeError:  # SymPy < 1.13 has no docstring_limit
+        return sp.lambdify(args, expr, modules="math", cse=True)
 
 
 @dataclass
@@ -260,6 +271,10 @@ class ReferenceResult:
     state_names, mode_names : list of str
     segments, nfev : int
         Smooth arcs integrated and right-hand-side evaluations (cost counters).
+    nudged, grazing : int
+        Events whose restart state had to be moved past the located root, and
+        events where no state strictly past the root was found within
+        :data:`NUDGE_MAX` (the root itself was then used).
     """
 
     t_final: float
@@ -275,6 +290,8 @@ class ReferenceResult:
     mode_names: list
     segments: int = 0
     nfev: int = 0
+    nudged: int = 0
+    grazing: int = 0
     settings: dict = field(default_factory=dict)
 
     def __iter__(self) -> Iterator:
@@ -380,7 +397,7 @@ def simulate_reference(model: Model, t_end: float, *, y0=None, t_eval: Sequence[
     nudge_max = NUDGE_MAX * scale
 
     log_t, log_guard, log_from_mode, log_to = [], [], [], []
-    n_events = segments = nfev = 0
+    n_events = segments = nfev = nudged = grazing = 0
     events_cache: dict[int, list] = {}
     while True:
         events = events_cache.setdefault(mode, ref.event_functions(mode))
@@ -403,7 +420,12 @@ def simulate_reference(model: Model, t_end: float, *, y0=None, t_eval: Sequence[
         while k_sample < samples.size and (samples[k_sample] < t_stop or
                                            (not fired and samples[k_sample] <= t_stop)):
             ts = samples[k_sample]
-            y_eval[k_sample] = sol.sol(ts) if sol is not None and ts != t else y
+            if ts == t or sol is None:
+                y_eval[k_sample] = y
+            elif ts == t_stop:
+                y_eval[k_sample] = sol.y[:, -1]
+            else:
+                y_eval[k_sample] = sol.sol(ts)
             mode_eval[k_sample] = mode
             k_sample += 1
 
@@ -422,9 +444,11 @@ def simulate_reference(model: Model, t_end: float, *, y0=None, t_eval: Sequence[
             d = math.ulp(te) if d == 0.0 else 2.0 * d
             if d > nudge_max:
                 t_new, y_new = te, np.asarray(sol.sol(te), dtype=float)
+                grazing += 1
                 break
             t_new = te + d
             y_new = np.asarray(sol.sol(t_new), dtype=float)
+        nudged += t_new != te
         if not np.all(np.isfinite(y_new)):
             raise SimulationError(f"the state became non-finite at t = {t_new:.6g} s "
                                   f"in mode '{ref.mode_names[mode]}'")
@@ -449,5 +473,5 @@ def simulate_reference(model: Model, t_end: float, *, y0=None, t_eval: Sequence[
         raise SimulationError(f"the state became non-finite by t = {t:.6g} s")
     event_log = {"t": np.array(log_t), "guard": log_guard, "from": log_from_mode, "to": log_to}
     return ReferenceResult(t, y, mode, n_events, event_log, samples, y_eval, mode_eval, mode0,
-                           list(ref.state_names), list(ref.mode_names), segments, nfev,
+                           list(ref.state_names), list(ref.mode_names), segments, nfev, nudged, grazing,
                            {"rtol": rtol, "atol": atol, "method": method, "t_end": t_end})

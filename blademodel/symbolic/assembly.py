@@ -58,7 +58,7 @@ def derive(model: Model) -> HybridSystem:
     coords = list(model.coordinates)
     params = [sp.Symbol(n, real=True) for n in model.parameters]
 
-    masses = {c: m.parameters()["m"].symbol for m in model.masses for c in m.coordinates}
+    masses = {m.coordinate(d): m.inertia(d).symbol for m in model.masses for d in m.dofs}
     M = sp.diag(*[masses[c] for c in coords])
 
     F_smooth = {c: sp.Integer(0) for c in coords}
