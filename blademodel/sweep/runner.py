@@ -113,6 +113,9 @@ def open_result(path: str | Path):
     """The result file as an :class:`xarray.Dataset`, with the study in ``attrs``."""
     import xarray as xr
     ds = xr.load_dataset(path)
+    for name in ("law", "error"):  # character arrays in the classic format: back to str
+        if ds[name].dtype.kind == "S":
+            ds[name] = ds[name].astype(str)
     ds.attrs["study"] = json.loads(ds.attrs["study"])
     ds.attrs["fields"] = json.loads(ds.attrs["fields"])
     return ds

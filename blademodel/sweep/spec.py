@@ -107,13 +107,39 @@ class Study(_Strict):
         return self.model_copy(update={"sweep": sweep, "run": run})
 
 
+def _merge(parent: dict, child: dict) -> dict:
+    """``child`` over ``parent``, merging nested mappings (lists are replaced)."""
+    out = dict(parent)
+    for k, v in child.items():
+        out[k] = _merge(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
+
+
 def load_study(path) -> Study:
-    """Read a study YAML file; ``base: {file: ...}`` is read relative to it."""
-    from ..config.loading import read_yaml, validate_file
+    """Read a study YAML file.
+
+    ``extends: other.yaml`` starts from another study and overrides what the file
+    states (nested mappings merge: a variant can change ``base.gamma_reference``
+    alone); ``base: {file: model.yaml}`` reads the base model from a file. Both
+    paths are relative to the study file.
+    """
+    from ..config.loading import _validation_error, read_yaml
     path = Path(path)
-    study = validate_file(Study, path)
+    data, root = read_yaml(path)
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: a study is a mapping, got {type(data).__name__}")
+    if "extends" in data:
+        parent = load_study(path.parent / data.pop("extends"))
+        data = _merge(parent.model_dump(exclude={"source"}), data)
+    try:
+        study = Study.model_validate(data)
+    except Exception as e:
+        from pydantic import ValidationError
+        if isinstance(e, ValidationError):
+            raise _validation_error(e, data, str(path), root) from None
+        raise
     base = dict(study.base)
     if "file" in base:
-        data, _ = read_yaml(path.parent / base.pop("file"))
-        base = {**data, **base}
+        file_data, _ = read_yaml(path.parent / base.pop("file"))
+        base = {**file_data, **base}
     return study.model_copy(update={"base": base, "source": str(path)})

@@ -1,8 +1,11 @@
 """Incremental NetCDF storage of a sweep, one point at a time, with resume.
 
-The file is laid out in full when the sweep starts (every output filled with
-NaN, ``done = 0``); each finished point is written and flushed at once by the
-single writer process, so a killed sweep loses at most the points in flight.
+The file is laid out in full when the sweep starts, in the NetCDF classic
+(64-bit offset) format: every output filled with NaN, ``done = 0``. After that
+the header never changes; a finished point's values are written in place and
+synced to disk *before* its ``done`` flag is set, by the single writer process.
+So a sweep killed at any instant leaves a readable file in which every point
+marked done is complete; the others are run again on resume.
 The study, the base config and the run settings travel in the file's
 attributes, so a result file says how it was made.
 """
@@ -19,6 +22,12 @@ from .. import __version__
 
 SCALARS = ("length_scale", "period", "motion", "lyapunov", "P", "P0", "Pd", "events")
 INTS = ("period", "motion", "events")
+LAW_CHARS, ERROR_CHARS = 32, 400
+FORMAT = "NETCDF3_64BIT_OFFSET"
+
+
+def _chars(text: str, n: int) -> np.ndarray:
+    return netCDF4.stringtoarr(text.encode("utf-8", "replace")[:n].decode("utf-8", "ignore"), n)
 
 
 def study_signature(study_json: str) -> str:
@@ -34,9 +43,11 @@ def create(path: Path, *, study_json: str, fields: list[str], values: list[list]
     """Lay out a new result file for ``len(values)`` points."""
     path = Path(path)
     tmp = path.with_suffix(".tmp.nc")
-    with netCDF4.Dataset(tmp, "w", format="NETCDF4") as ds:
+    with netCDF4.Dataset(tmp, "w", format=FORMAT) as ds:
         n = len(values)
         ds.createDimension("point", n)
+        ds.createDimension("law_chars", LAW_CHARS)
+        ds.createDimension("error_chars", ERROR_CHARS)
         ds.createDimension("sample", periods)
         ds.createDimension("state", n_state)
         if history:
@@ -48,21 +59,24 @@ def create(path: Path, *, study_json: str, fields: list[str], values: list[list]
         for j, f in enumerate(fields):
             v = ds.createVariable(f"param_{f}", "f8", ("point",))
             v[:] = [row[j] for row in values]
-        lv = ds.createVariable("law", str, ("point",))
+        lv = ds.createVariable("law", "S1", ("point", "law_chars"))
+        lv.set_auto_chartostring(False)
         for i, law in enumerate(laws):
-            lv[i] = law
+            lv[i, :] = _chars(law, LAW_CHARS)
         ds.createVariable("done", "i1", ("point",))[:] = 0
         for name in SCALARS:
-            kind = "i8" if name in INTS else "f8"
-            var = ds.createVariable(name, kind, ("point",), fill_value=-999 if kind == "i8" else np.nan)
-            var[:] = -999 if kind == "i8" else np.nan
+            kind = "i4" if name in INTS else "f8"
+            var = ds.createVariable(name, kind, ("point",), fill_value=-999 if kind == "i4" else np.nan)
+            var[:] = -999 if kind == "i4" else np.nan
         for name in ("poincare_x1", "poincare_vx1"):
             ds.createVariable(name, "f8", ("point", "sample"), fill_value=np.nan)
         ds.createVariable("final_state", "f8", ("point", "state"), fill_value=np.nan)
         if history:
             for name in ("history_t", "history_x1", "history_vx1"):
                 ds.createVariable(name, "f8", ("point", "time"), fill_value=np.nan)
-        ds.createVariable("error", str, ("point",))
+        ev = ds.createVariable("error", "S1", ("point", "error_chars"))
+        ev.set_auto_chartostring(False)
+        ev[:] = np.zeros((n, ERROR_CHARS), dtype="S1")
     tmp.replace(path)
 
 
@@ -78,8 +92,9 @@ def pending(path: Path, study_json: str) -> list[int]:
 def write_point(path: Path, index: int, out: dict) -> None:
     """Write one finished (or failed) point and mark it done."""
     with netCDF4.Dataset(path, "a") as ds:
+        ds["error"].set_auto_chartostring(False)
         if "error" in out:
-            ds["error"][index] = out["error"]
+            ds["error"][index, :] = _chars(out["error"] or "failed", ERROR_CHARS)
         else:
             for name in SCALARS:
                 if name in out:
@@ -87,7 +102,7 @@ def write_point(path: Path, index: int, out: dict) -> None:
             for name in ("poincare_x1", "poincare_vx1", "final_state", "history_t", "history_x1", "history_vx1"):
                 if name in out and name in ds.variables:
                     ds[name][index, : len(out[name])] = out[name]
-            ds["error"][index] = ""
+        ds.sync()  # the values reach the disk before the point is marked done
         ds["done"][index] = 1
 
 
