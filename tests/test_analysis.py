@@ -4,7 +4,6 @@ import math
 
 import numpy as np
 import pytest
-from numpy.testing import assert_allclose
 
 from blademodel.analysis import (CHAOS_THRESHOLD, amplitude_spectrum, classify_motion, largest_lyapunov,
                                  mean_square, poincare_period, vibration_reduction)

@@ -1,6 +1,5 @@
 """Sweeps: resume after a kill, failed points, identical results on every executor."""
 
-import os
 import signal
 import subprocess
 import sys
