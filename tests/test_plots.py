@@ -16,8 +16,8 @@ from matplotlib.colors import to_rgba
 from blademodel import cli
 from blademodel.plots import (bifurcation_figure, case_figure, cases_figure, load_result, periodicity_map_figure,
                               plot_result, reduction_figure)
-from blademodel.plots.periodicity_map import CODE_COLORS
 from blademodel.plots.common import FAILED, NOT_RUN, field_axis, motion_codes
+from blademodel.plots.periodicity_map import CODE_COLORS
 from blademodel.sweep import Study, points, storage
 
 OMEGA = 290.0
@@ -171,23 +171,21 @@ def test_periodicity_map_needs_two_fields():
 # --------------------------------------------------------------------------- case figures
 
 
-def harmonic_case(periods=10, S=50, sub=False):
-    """History and Poincare samples of x1 = gap (0.2 + 2 cos wt + 0.5 cos 2wt [+ 0.8 cos wt/2])."""
-    T = 2 * np.pi / OMEGA
+def harmonic_case(periods=10, S=50, sub=False, w=OMEGA):
+    """History of x1 = gap (0.2 + 2 cos wt + 0.5 cos 2wt [+ 0.8 cos wt/2]) and its velocity."""
+    T = 2 * np.pi / w
     t = 3 * T + np.arange(periods * S + 1) * T / S
-    w = OMEGA
     X = 0.2 + 2 * np.cos(w * t) + 0.5 * np.cos(2 * w * t) + (0.8 * np.cos(w * t / 2) if sub else 0)
     dX = -2 * w * np.sin(w * t) - w * np.sin(2 * w * t) - (0.4 * w * np.sin(w * t / 2) if sub else 0)
     return t, GAP * X, GAP * dX
 
 
 def test_case_figure_panels_period1():
-    t, x, v = harmonic_case()
-    pn = np.arange(6) * 2 * np.pi / OMEGA
-    px = GAP * (2.7 + 0 * pn)
+    w = 250.0   # not the default 290 rad/s: omega must come from the history's time step
+    t, x, v = harmonic_case(w=w)
     ds = make_ds(["gamma"], [1.0], ["bilinear"], [1], history=(t[None], x[None], v[None]),
-                 poincare=px[None], vpoincare=np.full((1, 6), 3 * GAP * OMEGA), lyapunov=[-0.45],
-                 study={"base": {"model": "blade_pair"}})   # omega from the history spacing, not the base
+                 poincare=np.full((1, 6), 2.7 * GAP), vpoincare=np.full((1, 6), 3 * GAP * w), lyapunov=[-0.45],
+                 study={"base": {"model": "blade_pair"}})
     fig = case_figure(ds, 0)
     ax_t, ax_f, ax_p, ax_ph = fig.axes
     title = fig.get_suptitle()
@@ -208,7 +206,7 @@ def test_case_figure_panels_period1():
     np.testing.assert_allclose(scatter(ax_p, "poincare"), np.column_stack([np.full(6, 2.7), np.full(6, 3.0)]))
     # (d) phase portrait: X1' = dX1/dtau
     (ph,) = [ln for ln in ax_ph.get_lines() if ln.get_gid() == "phase"]
-    np.testing.assert_allclose(ph.get_ydata(), v / (GAP * OMEGA))
+    np.testing.assert_allclose(ph.get_ydata(), v / (GAP * w))
 
 
 def test_case_spectrum_shows_subharmonic_of_period2():
@@ -237,9 +235,10 @@ def test_cases_figure_one_row_per_point_and_failed_point():
 
 
 def test_case_figure_without_history():
-    ds = make_ds(["gamma"], [1.0], ["coulomb"], [1])
+    ds = make_ds(["gamma"], [1.0], ["coulomb"], [1], study={"base": {"model": "blade_pair", "omega": 100.0}})
     fig = case_figure(ds, 0)
-    assert len(scatter(fig.axes[2], "poincare")) == 6
+    off = scatter(fig.axes[2], "poincare")   # omega from the base config without a history
+    np.testing.assert_allclose(off[:, 1], ds.poincare_vx1.values[0] / (GAP * 100.0))
     assert any("history" in tx.get_text() for tx in fig.axes[0].texts)
 
 

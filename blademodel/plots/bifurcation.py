@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.patches import Patch
 from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 from matplotlib.transforms import blended_transform_factory
 
 from .common import (FAILED, NOT_RUN, default_field, displacement, field_axis, field_values, law_name, laws_of,
@@ -15,18 +15,22 @@ from .common import (FAILED, NOT_RUN, default_field, displacement, field_axis, f
 SHADES = {-2: ("#f8d3cf", "chaos"), -1: ("#fde6c2", "quasi-periodic"), 0: ("#e6e6e6", "nonperiodic")}
 
 
-def _shade(ax, x, codes, log: bool) -> set:
-    """Shade the cells around the points of a non-periodic class; return the classes shown."""
+def _shade(ax, x, codes, log: bool, grid) -> set:
+    """Shade the cells around the points of a non-periodic class; return the classes shown.
+
+    ``grid`` holds every field value of the panel (run or not): the cells end
+    half-way to the neighbouring values.
+    """
     order = np.argsort(x)
     xs, cs = x[order], codes[order]
     keep = np.isfinite(xs)
     xs, cs = xs[keep], cs[keep]
     if len(xs) == 0:
         return set()
-    uniq, first = np.unique(xs, return_index=True)
-    edges = midpoint_edges(uniq, log=log and np.all(uniq > 0))
+    grid = np.unique(np.asarray(grid, dtype=float)[np.isfinite(grid)])
+    edges = midpoint_edges(grid, log=log and np.all(grid > 0))
     shown = set()
-    for j, v in enumerate(uniq):
+    for j, v in enumerate(grid):
         here = set(cs[xs == v].tolist())
         for code in (-2, -1, 0):  # the most irregular class of the points at this value wins
             if code in here:
@@ -76,7 +80,7 @@ def bifurcation_figure(ds, field: str | None = None, *, physical: bool | None = 
     for ax, law in zip(axes, laws):
         sel = np.flatnonzero(law_of == law)
         ran = sel[codes[sel] > FAILED]
-        shown = _shade(ax, xv[ran], codes[ran], log) if shade else set()
+        shown = _shade(ax, xv[ran], codes[ran], log, xv[sel]) if shade else set()
         x = np.repeat(xv[ran], n_samp)
         y = (px[ran] / div[ran, None]).ravel()
         ok = np.isfinite(x) & np.isfinite(y)
@@ -91,12 +95,13 @@ def bifurcation_figure(ds, field: str | None = None, *, physical: bool | None = 
             handles.append(Line2D([], [], ls="", marker="x", color="C3", label="failed"))
         not_run = sel[codes[sel] == NOT_RUN]
         if len(not_run):
-            handles.append(Patch(facecolor="none", edgecolor="0.6", hatch="//", label="not run"))
+            handles.append(Line2D([], [], ls="", marker="|", color="0.6", label="not run"))
             tr = blended_transform_factory(ax.transData, ax.transAxes)
             ax.scatter(xv[not_run], np.full(len(not_run), 0.02), transform=tr, marker="|", s=30, c="0.6",
                        zorder=4, gid="not_run", clip_on=False)
         if handles:
-            ax.legend(handles=handles, loc="upper left", fontsize=8, framealpha=0.9)
+            ax.legend(handles=handles, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=len(handles), fontsize=8,
+                      frameon=False, borderaxespad=0.1, handlelength=1.2)
         ax.set_ylabel(ylab)
         ax.set_title(f"{law_name(law)} friction" if law != "none" else law_name(law), fontsize=10, loc="left")
         if log:
@@ -108,6 +113,5 @@ def bifurcation_figure(ds, field: str | None = None, *, physical: bool | None = 
                 edges = midpoint_edges(np.unique(xv[sel]), log=log and lo > 0)
                 ax.set_xlim(edges[0] - pad, edges[-1] + pad)
     axes[-1].set_xlabel(xlab)
-    head = study_heading(ds)
-    fig.suptitle(f"{head}: bifurcation diagram" if head else "bifurcation diagram", fontsize=12)
+    fig.suptitle(study_heading(ds, "bifurcation diagram"), fontsize=12)
     return fig

@@ -200,7 +200,7 @@ def cases_figure(ds, *, law: str | None = None, physical: bool | None = None) ->
         draw_case(axes, ds, i, physical=physical, tag=str(r + 1) if len(pts) > 1 else "")
         sub.suptitle(point_title(ds, i, law=law is None), fontsize=11, x=0.01,
                      ha="left")
-    head = study_heading(ds)
+    head = study_heading(ds, "cases")
     if law is not None:
         head = f"{head} \u2014 {law_name(law)}" if head else law_name(law)
     if head:

@@ -274,7 +274,9 @@ def default_field(ds, field: str | None) -> str:
     return field
 
 
-def study_heading(ds) -> str:
-    """The study's title, or its name."""
+def study_heading(ds, kind: str = "") -> str:
+    """Figure heading: the study's title, else ``"<name>: <kind>"``."""
     st = study_of(ds)
-    return st.get("title") or st.get("name") or ""
+    if st.get("title"):
+        return st["title"]
+    return ": ".join(p for p in (st.get("name") or "", kind) if p)

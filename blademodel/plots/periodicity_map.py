@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.cm import ScalarMappable
 from matplotlib.colors import BoundaryNorm, ListedColormap, to_rgb
 from matplotlib.figure import Figure
 
 from .common import (FAILED, NOT_RUN, code_label, field_axis, fields_of, law_name, laws_of,
-                     midpoint_edges, motion_codes, study_heading, sweep_is_log)
+                     midpoint_edges, motion_codes, study_heading, study_of, sweep_is_log)
 
 #: Colour of every motion code: period-1..8 distinct hues, 9..16 a dark-green ramp,
 #: then the non-periodic classes, failed and not-run points.
@@ -18,8 +19,10 @@ CODE_COLORS = {
     -1: "#f0a330", -2: "#c44e52", 0: "#9a9a9a", FAILED: "#000000", NOT_RUN: "#ffffff",
 }
 
-#: Order of the classes in the colour bar (bottom to top).
-CODE_ORDER = [NOT_RUN, FAILED, 0, -2, -1] + list(range(1, 17))
+
+def _colour(code: int) -> str:
+    """Colour of a motion code (codes above 16 cannot occur; they get a dark green)."""
+    return CODE_COLORS.get(int(code), "#003300")
 
 
 def _grid(ds, sel: np.ndarray, f1: str, f2: str):
@@ -67,47 +70,38 @@ def periodicity_map_figure(ds, *, annotate: bool | None = None) -> Figure:
         If the result is not a sweep over two fields.
     """
     fields = fields_of(ds)
-    if len(fields) != 2 or study_of_cases(ds):
+    if len(fields) != 2 or _is_cases(ds):
         raise ValueError(f"a periodicity map needs a sweep over two fields; this result has {fields}")
     f1, f2 = fields
     laws = laws_of(ds)
     law_of = np.asarray(ds["law"].values).astype(str)
     factor1, factor2 = field_axis(f1)[1], field_axis(f2)[1]
     log1, log2 = sweep_is_log(ds, f1), sweep_is_log(ds, f2)
-    present = set(motion_codes(ds).tolist())
-    present = {c if c <= 16 else 16 for c in present}
-    shown = [c for c in CODE_ORDER if c in present]
-    cmap = ListedColormap([CODE_COLORS[c] for c in shown])
-    # Discrete colours on the codes themselves: each code falls in its own bin.
-    bounds = np.arange(len(shown) + 1) - 0.5
-    norm = BoundaryNorm(bounds, cmap.N)
-    rank = {c: i for i, c in enumerate(shown)}
+    shown = sorted(set(motion_codes(ds).tolist()))
+    cmap = ListedColormap([_colour(c) for c in shown])
+    # Discrete colours on the codes themselves: each present code has its own bin.
+    mids = [(a + b) / 2 for a, b in zip(shown[:-1], shown[1:])]
+    norm = BoundaryNorm([shown[0] - 0.5, *mids, shown[-1] + 0.5], cmap.N)
 
     fig = Figure(figsize=(1.2 + 5.2 * len(laws), 4.8), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, len(laws), squeeze=False, sharey=True)[0])
-    mesh = None
     for ax, law in zip(axes, laws):
         ua, ub, grid = _grid(ds, law_of == law, f1, f2)
         ua, grid = _sorted(ua, grid, 1)
         ub, grid = _sorted(ub, grid, 0)
         xe = midpoint_edges(ua * factor1, log=log1)
         ye = midpoint_edges(ub * factor2, log=log2)
-        clipped = np.where(grid > 16, 16, grid)
-        colour_index = np.vectorize(rank.get)(clipped)
-        mesh = ax.pcolormesh(xe, ye, grid, cmap=cmap, norm=norm, edgecolors="w", linewidth=0.3, gid=f"map:{law}")
-        # the QuadMesh keeps the codes as its data; colours come from their ranks
-        mesh.set_array(grid)
-        mesh.set_facecolor(cmap(norm(colour_index)).reshape(-1, 4))
-        mesh.update_scalarmappable = lambda *a, **k: None  # keep the explicit face colours
+        ax.pcolormesh(xe, ye, grid, cmap=cmap, norm=norm, edgecolors="w", linewidth=0.3, gid=f"map:{law}")
         if annotate if annotate is not None else grid.size <= 150:
             xc, yc = ua * factor1, ub * factor2
             for j in range(grid.shape[0]):
                 for i in range(grid.shape[1]):
                     code = int(grid[j, i])
-                    r, g, b = to_rgb(CODE_COLORS[min(code, 16)])
+                    r, g, b = to_rgb(_colour(code))
                     ink = "k" if 0.299 * r + 0.587 * g + 0.114 * b > 0.55 else "w"
                     ax.text(xc[i], yc[j], code_label(code).replace("quasi-periodic", "QP").replace(
-                        "nonperiodic", "NP").replace("not run", ""), ha="center", va="center", fontsize=7,
+                        "nonperiodic", "NP").replace("not run", ""), ha="center", va="center",
+                        fontsize=9 if grid.size <= 40 else 7,
                         color=ink)
         if log1:
             ax.set_xscale("log")
@@ -116,25 +110,16 @@ def periodicity_map_figure(ds, *, annotate: bool | None = None) -> Figure:
         ax.set_xlabel(field_axis(f1)[0])
         ax.set_title(f"{law_name(law)} friction" if law != "none" else law_name(law), fontsize=10, loc="left")
     axes[0].set_ylabel(field_axis(f2)[0])
-    sm = _Mappable(cmap, norm)
-    cb = fig.colorbar(sm, ax=list(axes), ticks=np.arange(len(shown)), fraction=0.05, pad=0.02)
-    cb.ax.set_yticklabels(["P>15" if c == 16 and any(v > 16 for v in motion_codes(ds)) else code_label(c)
-                           for c in shown])
+    sm = ScalarMappable(norm=norm, cmap=cmap)
+    cb = fig.colorbar(sm, ax=list(axes), ticks=shown, fraction=0.04, aspect=30, pad=0.02)
+    cb.ax.set_yticklabels([code_label(c) for c in shown])
+    cb.ax.minorticks_off()
     cb.ax.tick_params(labelsize=8)
-    cb.set_label("motion")
-    head = study_heading(ds)
-    fig.suptitle(f"{head}: periodicity map" if head else "periodicity map", fontsize=12)
+    cb.ax.set_title("motion", fontsize=9, loc="left")
+    fig.suptitle(study_heading(ds, "periodicity map"), fontsize=12)
     return fig
 
 
-def study_of_cases(ds) -> bool:
+def _is_cases(ds) -> bool:
     """Whether the result is a set of case points rather than a sweep."""
-    from .common import study_of
     return bool(study_of(ds).get("cases"))
-
-
-def _Mappable(cmap, norm):
-    from matplotlib.cm import ScalarMappable
-    sm = ScalarMappable(norm=norm, cmap=cmap)
-    sm.set_array([])
-    return sm

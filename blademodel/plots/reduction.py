@@ -73,6 +73,5 @@ def reduction_figure(ds, field: str | None = None) -> Figure:
     ax.set_ylabel("vibration reduction $P_d$ (%)")
     ax.grid(alpha=0.3)
     ax.legend(title="friction law", fontsize=9)
-    head = study_heading(ds)
-    fig.suptitle(f"{head}: vibration reduction" if head else "vibration reduction", fontsize=12)
+    fig.suptitle(study_heading(ds, "vibration reduction"), fontsize=12)
     return fig
