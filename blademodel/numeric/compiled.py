@@ -33,6 +33,20 @@ def cache_dir() -> Path:
     return d
 
 
+def _law_sources(model: Model) -> str:
+    """Hash of the source of every friction law class the model uses (external ones too)."""
+    h = hashlib.sha256()
+    for cls in sorted({type(c.friction) for c in model.contacts}, key=lambda c: f"{c.__module__}.{c.__qualname__}"):
+        for klass in cls.__mro__:
+            if klass.__module__.startswith("blademodel.components.friction") or klass is object:
+                continue  # the package's own laws are in _code_version
+            try:
+                h.update(inspect.getsource(klass).encode())
+            except (OSError, TypeError):
+                h.update(f"{klass.__module__}.{klass.__qualname__}".encode())
+    return h.hexdigest()[:8]
+
+
 def _code_version() -> str:
     """Hash of the sources that shape generated code, so edits invalidate the cache."""
     from ..components import friction as friction_pkg
@@ -100,7 +114,7 @@ def compile_model(model: Model, *, energy: bool = False) -> CompiledSystem:
     energy : bool
         Include the work/dissipation accumulators (a separate kernel).
     """
-    key = f"{model.structure_key()}_{_code_version()}_{'e' if energy else 'n'}"
+    key = f"{model.structure_key()}_{_code_version()}{_law_sources(model)}_{'e' if energy else 'n'}"
     if key in _MEMO:
         return _MEMO[key]
     folder = cache_dir()
