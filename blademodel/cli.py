@@ -68,6 +68,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return int(args.run(args) or 0)
+    except BrokenPipeError:  # the reader went away (``blademodel ... | head``)
+        sys.stderr.close()
+        return 0
     except (ValueError, KeyError) as e:  # ConfigError is a ValueError
         print(f"error: {_message(e)}", file=sys.stderr)
         return EXIT_USAGE

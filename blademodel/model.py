@@ -82,7 +82,9 @@ class Model:
             params += list(c.friction.parameters().values())
         for p in params:
             if p.name in out and out[p.name] != p.value:
-                raise ValueError(f"parameter {p.name} is shared with two values: {out[p.name]} and {p.value}")
+                raise ValueError(f"parameter {p.name} is shared with two values: {out[p.name]} and {p.value}; "
+                                 f"components given plain numbers take default names, so name one of them "
+                                 f"explicitly, e.g. Param('{p.name}_2', {p.value})")
             out[p.name] = p.value
         return out
 
