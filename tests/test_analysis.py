@@ -46,6 +46,7 @@ def test_chaotic_map_has_no_period():
     assert poincare_period(x) == 0
     assert classify_motion(x, lyapunov=math.log(2)) == "chaos"   # its exponent is ln 2
     assert classify_motion(x, lyapunov=0.0) == "quasi-periodic"
+    assert classify_motion(x, lyapunov=-0.3) == "nonperiodic"   # attracting, but no period <= 16
     assert CHAOS_THRESHOLD < math.log(2)
 
 

@@ -1,11 +1,11 @@
 """Analyses of simulation results: pure functions of results (the Lyapunov
 estimate advances a given integrator, nothing else)."""
 
-from .classify import CHAOS_THRESHOLD, classify_motion
+from .classify import CHAOS_THRESHOLD, classify_motion, motion_class
 from .lyapunov import largest_lyapunov
 from .periodicity import periodicity_label, poincare_period
 from .reduction import mean_square, vibration_reduction
 from .spectrum import amplitude_spectrum
 
 __all__ = ["poincare_period", "periodicity_label", "amplitude_spectrum", "largest_lyapunov",
-           "mean_square", "vibration_reduction", "classify_motion", "CHAOS_THRESHOLD"]
+           "mean_square", "vibration_reduction", "classify_motion", "motion_class", "CHAOS_THRESHOLD"]

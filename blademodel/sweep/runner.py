@@ -12,7 +12,8 @@ import numpy as np
 
 from . import storage
 from .executors import choose
-from .point import build_config, run_point
+from ..analysis import motion_class
+from .point import build_config, motion_code, run_point
 from .spec import Study
 
 
@@ -118,4 +119,11 @@ def open_result(path: str | Path):
             ds[name] = ds[name].astype(str)
     ds.attrs["study"] = json.loads(ds.attrs["study"])
     ds.attrs["fields"] = json.loads(ds.attrs["fields"])
+    # The class is derived from the stored raw data (period, exponent) with the
+    # current rule, so an older file never shows a stale classification.
+    motion = ds["motion"].values.astype(float)
+    for i, (period, lam, err) in enumerate(zip(ds["period"].values, ds["lyapunov"].values, ds["error"].values)):
+        if ds["done"].values[i] and not err and not np.isnan(period):
+            motion[i] = motion_code(motion_class(int(period), None if np.isnan(lam) else float(lam)))
+    ds["motion"] = ("point", motion)
     return ds

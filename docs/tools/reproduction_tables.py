@@ -14,21 +14,29 @@ from pathlib import Path
 
 import numpy as np
 
+from blademodel.analysis import motion_class
 from blademodel.sweep import open_result
-from blademodel.sweep.point import motion_label
 
 
-def _label(code: float, error: str) -> str:
-    if error:
-        return "failed"
-    return "?" if np.isnan(code) else motion_label(int(code))
+def _labels(ds) -> list[str]:
+    """Motion class of every point, from its stored period and Lyapunov exponent."""
+    out = []
+    for period, lam, err, done in zip(ds["period"].values, ds["lyapunov"].values, ds["error"].values,
+                                      ds["done"].values):
+        if err:
+            out.append("failed")
+        elif not done:
+            out.append("?")
+        else:
+            out.append(motion_class(int(period), None if np.isnan(lam) else float(lam)))
+    return out
 
 
 def intervals(ds) -> str:
     """Runs of equal motion class along a 1-D sweep: ``P1 [0.5, 7.3]; chaos [7.4, 8.0]; ...``."""
     field = ds.attrs["fields"][0]
     x = ds[f"param_{field}"].values
-    labels = [_label(c, e) for c, e in zip(ds["motion"].values, ds["error"].values)]
+    labels = _labels(ds)
     order = np.argsort(x)
     runs, start = [], 0
     for i in range(1, len(order) + 1):
@@ -39,12 +47,12 @@ def intervals(ds) -> str:
 
 
 def cases(ds) -> list[str]:
-    rows = []
+    rows, labels = [], _labels(ds)
     for i in range(ds.sizes["point"]):
         vals = ", ".join(f"{f} = {ds[f'param_{f}'].values[i]:g}" for f in ds.attrs["fields"]
                          if not np.isnan(ds[f"param_{f}"].values[i]))
         lam = float(ds["lyapunov"].values[i])
-        rows.append(f"{ds['law'].values[i]}, {vals}: {_label(ds['motion'].values[i], str(ds['error'].values[i]))}"
+        rows.append(f"{ds['law'].values[i]}, {vals}: {labels[i]}"
                     + ("" if np.isnan(lam) else f" (λ = {lam:+.3f}/T)"))
     return rows
 
