@@ -82,3 +82,27 @@ def test_pd_is_zero_when_the_gap_is_too_large_for_contact():
     assert out["Pd"] == 0.0 and out["P"] == out["P0"] > 0
     touching = run_point({"model": "blade_pair", "friction": "bilinear"}, {"gap": 4e-5}, run)
     assert touching["Pd"] > 10   # the contact does remove vibration when it closes
+
+
+def test_streamed_mean_square_equals_the_mean_over_full_records():
+    from blademodel.numeric import simulate
+    from blademodel.numeric.mean_square import mean_square_run
+    model = BladePair(friction="coulomb").build()
+    r = simulate(model, transient=7, periods=13, steps_per_period=300)
+    full = mean_square(r.y, r.state_names, ("x1", "y1"))
+    streamed = mean_square_run(model, transient=7, periods=13, steps_per_period=300, chunk_periods=4)
+    assert streamed == pytest.approx(full, rel=1e-13)
+
+
+def test_simulate_json_reports_pd(tmp_path):
+    import json
+    import subprocess
+    import sys
+    out = subprocess.run([sys.executable, "-m", "blademodel", "simulate", "models/blade_pair_bilinear.yaml",
+                          "--json", "--transient", "20", "--periods", "10", "--steps-per-period", "400"],
+                         capture_output=True, text=True, check=True)
+    rep = json.loads(out.stdout)
+    run = dict(transient=20, periods=10, steps_per_period=400, event_tol=1e-10, vibration_reduction=True)
+    point = run_point({"model": "blade_pair", "friction": "bilinear"}, {}, run)
+    assert rep["Pd"] == pytest.approx(point["Pd"], rel=1e-10)
+    assert rep["poincare"]["X1"] == pytest.approx(list(point["poincare_x1"] / 4e-5), rel=1e-12)

@@ -8,7 +8,8 @@ import sys
 
 import numpy as np
 
-from ..analysis import periodicity_label
+from ..analysis import mean_square, periodicity_label, vibration_reduction
+from ..numeric.mean_square import mean_square_run, without_contacts
 from ..config import apply_overrides, load_config
 from ..numeric import SimulationError, simulate
 from .common import parse_overrides
@@ -47,6 +48,17 @@ def _length_scale(config, model) -> float | None:
     return gap if gap else None
 
 
+def _vibration_reduction(model, result, args) -> float | None:
+    """``P_d`` in percent against the same model without contacts (None without contacts)."""
+    if not model.contacts:
+        return None
+    names = model.masses[0].coordinates
+    P = mean_square(result.y, result.state_names, names)
+    P0 = mean_square_run(without_contacts(model), transient=args.transient, periods=args.periods,
+                         steps_per_period=args.steps_per_period, event_tol=args.event_tol, names=names)
+    return vibration_reduction(P, P0)
+
+
 def report(config, model, result) -> dict:
     """The JSON report of a run (SI units; ``X1 = x1 / gap``)."""
     scale = result.length_scale
@@ -74,12 +86,12 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = simulate(model, periods=args.periods, transient=args.transient,
                           steps_per_period=args.steps_per_period, event_tol=args.event_tol,
-                          length_scale=_length_scale(config, model), progress=_progress,
-                          record_every=1 if args.out else args.steps_per_period)
+                          length_scale=_length_scale(config, model), progress=_progress, record_every=1)
     except SimulationError as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
     rep = report(config, model, result)
+    rep["Pd"] = _vibration_reduction(model, result, args)
     if args.out:
         np.savez_compressed(args.out, t=result.t, y=result.y, mode=result.mode, poincare=result.poincare,
                             poincare_t=result.poincare_t, state_names=np.array(result.state_names),

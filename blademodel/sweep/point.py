@@ -9,6 +9,7 @@ import numpy as np
 from ..analysis import classify_motion, largest_lyapunov, mean_square, poincare_period, vibration_reduction
 from ..config import apply_overrides, config_from_data
 from ..numeric import HybridIntegrator
+from ..numeric.mean_square import mean_square_run, without_contacts
 
 #: Motion codes stored in result files.
 MOTION_CODES = {"nonperiodic": 0, "quasi-periodic": -1, "chaos": -2}
@@ -39,21 +40,15 @@ def _length_scale(cfg, model) -> float:
 _P0_MEMO: dict = {}
 
 
-def _reference_mean_square(cfg, run: dict) -> float:
-    """``P0``: the same mean for the system without contact (memoised: a gap or gamma sweep shares it)."""
-    model0 = cfg.build(contact=False)
+def _reference_mean_square(model, run: dict) -> float:
+    """``P0``: the same mean for the model without contacts (memoised: a gap or gamma sweep shares it)."""
+    model0 = without_contacts(model)
     key = (model0.structure_key(), tuple(sorted(model0.parameters.items())), run["transient"], run["periods"],
            run["steps_per_period"])
     if key not in _P0_MEMO:
-        free = HybridIntegrator(model0, steps_per_period=run["steps_per_period"], event_tol=run["event_tol"])
-        n = run["periods"] * free.steps_per_period + 1
-        rec = (np.empty(n), np.empty((n, free.n_state)), np.empty(n, dtype=np.int64))
-        y = free.initial_state()
-        status, _, _ = free.advance(y, free.mode_of(y), 0, run["transient"] + run["periods"],
-                                    n_transient=run["transient"], record=rec)
-        if status:
-            raise RuntimeError("the contact-free reference run failed")
-        _P0_MEMO[key] = mean_square(rec[1], free.state_names)
+        _P0_MEMO[key] = mean_square_run(model0, transient=run["transient"], periods=run["periods"],
+                                        steps_per_period=run["steps_per_period"], event_tol=run["event_tol"],
+                                        names=("x1", "y1"))
     return _P0_MEMO[key]
 
 
@@ -122,7 +117,7 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
             out.update(history_t=rec[0][tail].copy(), history_x1=rec[1][tail, ix].copy(),
                        history_vx1=rec[1][tail, iv].copy())
         if want_pd:
-            P, P0 = mean_square(rec[1], names), _reference_mean_square(cfg, run)
+            P, P0 = mean_square(rec[1], names), _reference_mean_square(model, run)
             out.update(P=P, P0=P0, Pd=vibration_reduction(P, P0))
         return out
     except Exception as e:  # a failed point is recorded, the sweep goes on
