@@ -79,7 +79,8 @@ def test_pd_is_zero_when_the_gap_is_too_large_for_contact():
     run = dict(transient=20, periods=10, steps_per_period=400, event_tol=1e-10, vibration_reduction=True)
     out = run_point({"model": "blade_pair", "friction": "bilinear"}, {"gap": 1.0}, run)
     assert out["events"] == 0
-    assert out["Pd"] == 0.0 and out["P"] == out["P0"] > 0
+    # Bit-identical trajectories; the two means are summed in a different order.
+    assert abs(out["Pd"]) < 1e-10 and out["P"] == pytest.approx(out["P0"], rel=1e-12) and out["P0"] > 0
     touching = run_point({"model": "blade_pair", "friction": "bilinear"}, {"gap": 4e-5}, run)
     assert touching["Pd"] > 10   # the contact does remove vibration when it closes
 
