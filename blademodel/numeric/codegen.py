@@ -7,7 +7,14 @@ optimisations keep SymPy's output fast:
 * every maximal sub-expression that depends on parameters only (``sin(alpha)``,
   ``kx/m``) is *hoisted*: computed once per run by ``derived()`` into extra slots
   of the parameter array, never inside the step loop;
-* common sub-expressions are shared within each mode's block (``sympy.cse``).
+* common sub-expressions are shared within each mode's block (``sympy.cse``);
+* the RK4 step is *fused*: :func:`fused_rk4_source` writes ``rk4_step`` with each
+  mode's flow inlined four times and the stages held in scalar locals (no work
+  arrays, no calls but ``math``). It replaces the template's
+  :func:`blademodel.numeric.loop.rk4_step` with the same operations in the same
+  order (bit-identical results) at about two thirds of the cost: Numba neither
+  inlines ``rhs`` into the generic step nor removes the reference counting of its
+  eleven array arguments (``docs/benchmarks``, ``benchmarks/per_step.py``).
 """
 
 from __future__ import annotations
@@ -69,14 +76,74 @@ class _Hoister:
         return expr.func(*[self(a) for a in expr.args])
 
 
+def _cse(exprs, tag):
+    """``sympy.cse`` of ``exprs`` with sub-expressions named ``{tag}_k``."""
+    return sp.cse(list(exprs), symbols=sp.numbered_symbols(f"{tag}_"), optimizations="basic")
+
+
+def _print_cse(cse, targets, printer, indent, number_as_float=False):
+    """Source lines of a ``_cse`` result assigning the reduced expressions to ``targets``."""
+    reps, reduced = cse
+    pad = " " * indent
+
+    def show(e):
+        if number_as_float and e.is_Number:
+            return repr(float(e))  # scalar locals stay float64 in every mode
+        return printer.doprint(e)
+
+    lines = [f"{pad}{s} = {printer.doprint(e)}" for s, e in reps]
+    lines += [f"{pad}{tgt} = {show(e)}" for tgt, e in zip(targets, reduced)]
+    return lines
+
+
 def _block(exprs, targets, printer, indent, tag):
     """Source lines assigning ``exprs`` to ``targets`` with shared sub-expressions."""
-    syms = sp.numbered_symbols(f"{tag}_")
-    reps, reduced = sp.cse(list(exprs), symbols=syms, optimizations="basic")
-    pad = " " * indent
-    lines = [f"{pad}{s} = {printer.doprint(e)}" for s, e in reps]
-    lines += [f"{pad}{tgt} = {printer.doprint(e)}" for tgt, e in zip(targets, reduced)]
-    return lines
+    return _print_cse(_cse(exprs, tag), targets, printer, indent)
+
+
+def fused_rk4_source(flow_cses, state, t, params: dict) -> list[str]:
+    """Source lines of ``rk4_step`` with every mode's flow inlined, stages in scalars.
+
+    The arithmetic is that of :func:`blademodel.numeric.loop.rk4_step` calling the
+    generated ``rhs``: the same printed expressions, the same stage sums in the same
+    order, so the result is bit-identical. The state enters as ``y_i``, the stage
+    states are ``s_i``, the slopes ``k1_i ... k4_i``; only ``y`` and ``out`` are
+    arrays (the work-array arguments are kept for the template's signature).
+
+    Parameters
+    ----------
+    flow_cses : list
+        ``_cse`` of each mode's (hoisted) flow, in mode order.
+    state : list of Symbol
+    t : Symbol
+    params : dict
+        Symbol to printed name for parameters and hoisted constants.
+    """
+    n = len(state)
+
+    def printer(arg, time):
+        names = {s: f"{arg}_{i}" for i, s in enumerate(state)}
+        names[t] = time
+        return _Printer({**names, **params})
+
+    pad = " " * 8
+    L = ["def rk4_step(mode, t, y, h, p, k1, k2, k3, k4, tmp, out):",
+         '    """One RK4 step (fused, generated): see ``blademodel.numeric.loop.rk4_step``."""']
+    for m, cse in enumerate(flow_cses):
+        L.append(f"    {'if' if m == 0 else 'elif'} mode == {m}:")
+        L += [f"{pad}y_{i} = y[{i}]" for i in range(n)]
+        L += _print_cse(cse, [f"k1_{i}" for i in range(n)], printer("y", "t"), 8, True)
+        L.append(f"{pad}t_half = t + 0.5 * h")
+        L += [f"{pad}s_{i} = y_{i} + 0.5 * h * k1_{i}" for i in range(n)]
+        L += _print_cse(cse, [f"k2_{i}" for i in range(n)], printer("s", "t_half"), 8, True)
+        L += [f"{pad}s_{i} = y_{i} + 0.5 * h * k2_{i}" for i in range(n)]
+        L += _print_cse(cse, [f"k3_{i}" for i in range(n)], printer("s", "t_half"), 8, True)
+        L += [f"{pad}s_{i} = y_{i} + h * k3_{i}" for i in range(n)]
+        L.append(f"{pad}t_end = t + h")
+        L += _print_cse(cse, [f"k4_{i}" for i in range(n)], printer("s", "t_end"), 8, True)
+        L += [f"{pad}out[{i}] = y_{i} + h / 6.0 * (k1_{i} + 2.0 * k2_{i} + 2.0 * k3_{i} + k4_{i})"
+              for i in range(n)]
+    return L
 
 
 def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
@@ -133,10 +200,11 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
     L.append("    return out")
     L.append("")
 
+    flow_cses = [_cse(f, "x") for f in flows]
     L.append("def rhs(mode, t, y, p, out):")
     for m, f in enumerate(flows):
         L.append(f"    {'if' if m == 0 else 'elif'} mode == {m}:")
-        L += _block(f, [f"out[{i}]" for i in range(len(f))], pr_y, 8, "x")
+        L += _print_cse(flow_cses[m], [f"out[{i}]" for i in range(len(f))], pr_y, 8)
     L.append("")
 
     L.append("def guards(mode, t, y, p, out):")
@@ -188,6 +256,10 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
 
     L.append("# ---- generic loop (blademodel/numeric/loop.py) ----")
     L.append(inspect.getsource(loop))
+    L.append("")
+    L.append("# ---- the template's rk4_step, fused for this model (codegen.fused_rk4_source) ----")
+    full_state = list(state) + [sp.Symbol(f"_energy_{i}") for i in range(n_state - len(state))]
+    L += fused_rk4_source(flow_cses, full_state, t, {**pnames, **const_names})
     L.append("")
     for fn in ("rhs", "guards", "transition", "rk4_step", "crossed", "first_crossing", "initial_mode",
                "integrate"):

@@ -47,18 +47,26 @@ def _law_sources(model: Model) -> str:
     return h.hexdigest()[:8]
 
 
+_CODE_VERSION: list[str] = []
+
+
 def _code_version() -> str:
-    """Hash of the sources that shape generated code, so edits invalidate the cache."""
+    """Hash of the sources that shape generated code, so edits invalidate the cache.
+
+    The files are read, not imported: a process that finds its kernel in the cache
+    never imports the symbolic layer or the code generator (start-up time).
+    """
+    if _CODE_VERSION:
+        return _CODE_VERSION[0]
     from ..components import friction as friction_pkg
-    from ..symbolic import assembly
-    from . import codegen, loop
+    here = Path(__file__).resolve().parent
     h = hashlib.sha256()
-    mods = [assembly, codegen, loop]
-    for mod in mods:
-        h.update(inspect.getsource(mod).encode())
+    for path in (here.parent / "symbolic" / "assembly.py", here / "codegen.py", here / "loop.py"):
+        h.update(path.read_text(encoding="utf-8").encode())
     for path in sorted(Path(friction_pkg.__file__).parent.glob("*.py")):
         h.update(path.read_bytes())
-    return h.hexdigest()[:12]
+    _CODE_VERSION.append(h.hexdigest()[:12])
+    return _CODE_VERSION[0]
 
 
 @dataclass

@@ -22,7 +22,11 @@ C_STEPS, C_EVENTS, C_BISECTIONS, C_RHS, C_LOGGED, C_RECORDS = 0, 1, 2, 3, 4, 5
 
 
 def rk4_step(mode, t, y, h, p, k1, k2, k3, k4, tmp, out):
-    """One classical RK4 step of size ``h`` from ``(t, y)`` in ``mode`` into ``out``."""
+    """One classical RK4 step of size ``h`` from ``(t, y)`` in ``mode`` into ``out``.
+
+    The reference definition: each generated module replaces it by a fused version
+    with the same arithmetic (:func:`blademodel.numeric.codegen.fused_rk4_source`).
+    """
     n = y.shape[0]
     rhs(mode, t, y, p, k1)  # noqa: F821
     for i in range(n):

@@ -1,0 +1,170 @@
+"""Shared helpers of the benchmark scripts (not part of the package).
+
+Every script measures *ratios* of methods run side by side in one process, with
+the repeats interleaved (A, B, A, B, ...) and the minimum (or median) taken, and
+prints the machine load: the benchmark machine is shared and noisy, so no lone
+absolute time is meaningful. Results go to ``docs/benchmarks/<name>.json``.
+"""
+
+from __future__ import annotations
+
+import atexit
+import ctypes
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+OUT = ROOT / "docs" / "benchmarks"
+
+#: Parameter order of the C baseline (benchmarks/rk4_blades.c).
+C_PARAMS = "m kx ky cx cy F0 omega phi1 beta phi2 Delta alpha k mu kd".split()
+
+
+def cpu_time() -> float:
+    """CPU time of the calling thread (s): time given to other processes is not counted."""
+    return time.thread_time()
+
+
+def machine() -> dict:
+    """Load and environment, for the record."""
+    import numba
+    import scipy
+    return {"loadavg_1_5_15": [round(x, 2) for x in os.getloadavg()], "cpus": os.cpu_count(),
+            "python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
+            "numba": numba.__version__, "machine": platform.machine(), "processor": platform.processor(),
+            "date": time.strftime("%Y-%m-%d %H:%M:%S")}
+
+
+def print_load(tag: str = "") -> list:
+    la = [round(x, 2) for x in os.getloadavg()]
+    print(f"[load average {la[0]} {la[1]} {la[2]} on {os.cpu_count()} cpus{' ' + tag if tag else ''}]", flush=True)
+    return la
+
+
+def write_json(name: str, data: dict) -> Path:
+    OUT.mkdir(parents=True, exist_ok=True)
+    path = OUT / f"{name}.json"
+    path.write_text(json.dumps(data, indent=1, default=_default) + "\n")
+    return path
+
+
+def _default(o):
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    if isinstance(o, (np.floating,)):
+        return float(o)
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(type(o))
+
+
+def table(rows: list[dict], cols: list[tuple[str, str, str]]) -> str:
+    """Plain-text table; ``cols`` = (key, header, format)."""
+    cells = [[h for _, h, _ in cols]]
+    for r in rows:
+        cells.append([("-" if r.get(k) is None else format(r[k], f)) if f else str(r.get(k, "-"))
+                      for k, _, f in cols])
+    w = [max(len(c[i]) for c in cells) for i in range(len(cols))]
+    lines = ["  ".join(c.rjust(w[i]) if i else c.ljust(w[i]) for i, c in enumerate(row)) for row in cells]
+    lines.insert(1, "  ".join("-" * x for x in w))
+    return "\n".join(lines)
+
+
+def scale_vector(cfg, n: int) -> np.ndarray:
+    """Per-state scale of the error norm: ``gap`` for displacements and the Jenkins
+    stretch, ``gap * omega`` for velocities (the paper's X = x/gap, X' = v/(gap omega))."""
+    s = np.full(n, abs(cfg.gap))
+    s[4:8] = abs(cfg.gap) * cfg.omega
+    return s
+
+
+def state_error(y, y_ref, scale) -> float:
+    """Max-norm of the scaled final-state difference (non-dimensional, as X = x/gap)."""
+    return float(np.max(np.abs(np.asarray(y)[: len(scale)] - np.asarray(y_ref)[: len(scale)]) / scale))
+
+
+# --------------------------------------------------------------------------- C baseline
+
+class CKernel:
+    """The hand-written C RK4 (benchmarks/rk4_blades.c), compiled with ``gcc -O3``."""
+
+    def __init__(self, flags=("-O3",)):
+        build_dir = Path(tempfile.mkdtemp(prefix="blademodel-bench-"))
+        atexit.register(shutil.rmtree, build_dir, ignore_errors=True)
+        src = HERE / "rk4_blades.c"
+        lib = build_dir / "rk4_blades.so"
+        cmd = ["gcc", *flags, "-shared", "-fPIC", "-o", str(lib), str(src), "-lm"]
+        subprocess.run(cmd, check=True)
+        self.command = " ".join(cmd[:-4] + ["rk4_blades.c", "-lm"])
+        self.lib = ctypes.CDLL(str(lib))
+        dp, lp = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_long)
+        f = self.lib.integrate
+        f.argtypes = [ctypes.c_int, dp, ctypes.POINTER(ctypes.c_int), dp, ctypes.c_double, ctypes.c_long,
+                      ctypes.c_long, ctypes.c_long, ctypes.c_double, ctypes.c_long, lp, dp, dp]
+        f.restype = ctypes.c_int
+        self._f, self._dp, self._lp = f, dp, lp
+
+    def run(self, cfg, model, y0, mode0: int, period: float, steps: int, start: int, end: int,
+            event_tol: float = 1e-10, max_events: int = 100):
+        """Integrate periods ``[start, end)``; returns ``(status, y, mode, counters[steps, events, bisections, rhs])``."""
+        law = {"coulomb": 0, "bilinear": 1}[cfg.friction]
+        prm = np.array([model.parameters.get(n, 1.0) for n in C_PARAMS], dtype=float)
+        y = np.array(y0, dtype=float)
+        mode = ctypes.c_int(int(mode0))
+        c = np.zeros(4, dtype=np.int64)
+        po = np.empty((end - start, y.size))
+        t = ctypes.c_double()
+        dp = self._dp
+        st = self._f(law, y.ctypes.data_as(dp), ctypes.byref(mode), prm.ctypes.data_as(dp), period, steps,
+                     start, end, event_tol, max_events, c.ctypes.data_as(self._lp), po.ctypes.data_as(dp),
+                     ctypes.byref(t))
+        return st, y, mode.value, c
+
+
+def kernel_runner(integ, y0, mode0: int, start: int, end: int):
+    """A closure running the compiled kernel over periods ``[start, end)`` from a copy of ``y0``."""
+    n = integ.n_state
+    po = np.empty((end - start, n))
+
+    def run():
+        y = np.array(y0, dtype=float)
+        c = np.zeros(6, dtype=np.int64)
+        st, mode, _ = integ.advance(y, mode0, start, end, poincare=po, counters=c)
+        return st, y, mode, c
+    return run
+
+
+def interleaved(funcs: dict, repeats: int, clock=cpu_time) -> dict:
+    """Time each callable ``repeats`` times, interleaved; returns ``{name: [times]}``."""
+    times = {k: [] for k in funcs}
+    for _ in range(repeats):
+        for k, f in funcs.items():
+            t0 = clock()
+            f()
+            times[k].append(clock() - t0)
+    return times
+
+
+def python_env(**extra) -> dict:
+    env = dict(os.environ)
+    env.update({k: str(v) for k, v in extra.items()})
+    env["PYTHONPATH"] = str(ROOT) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    return env
+
+
+def run_python(code: str, **env) -> dict:
+    """Run ``code`` in a fresh interpreter; it must print one JSON object last."""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=python_env(**env))
+    if out.returncode:
+        raise RuntimeError(f"subprocess failed:\n{out.stderr[-3000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
