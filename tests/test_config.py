@@ -142,7 +142,7 @@ blade2:
     ("kx: 1e5", "kx: -.inf", "m.yaml:3: kx = -inf: Input should be a finite number"),
     ("kx: 1e5", "kx: abc", "m.yaml:3: kx = 'abc': Input should be a valid number"),
     ("friction: coulomb", "friction: magic",
-     "m.yaml:5: friction = 'magic': Input should be 'coulomb', 'bilinear' or 'none'"),
+     "m.yaml:5: friction = 'magic': unknown friction law 'magic': known laws are bilinear, coulomb, iwan, none"),
     ("friction: coulomb", "friction: coulomb\ngama: 4", "m.yaml:6: gama = 4: Extra inputs are not permitted"),
     ("  m: 0.09", "  m: -0.09", "m.yaml:7: blade2.m = -0.09: Input should be greater than 0"),
     ("  kx: 1.1e5", "  kxx: 1.1e5", "m.yaml:8: blade2.kxx = '1.1e5': Extra inputs are not permitted"),

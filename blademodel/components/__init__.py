@@ -3,10 +3,10 @@
 from .contact import Contact
 from .damper import Damper
 from .force import HarmonicForce
-from .friction import Coulomb, FrictionLaw, Jenkins, NoFriction
+from .friction import Coulomb, FrictionLaw, Iwan, Jenkins, NoFriction
 from .mass import Mass, coordinate_name
 from .parameter import Param
 from .spring import Spring
 
 __all__ = ["Mass", "Spring", "Damper", "HarmonicForce", "Contact", "Param", "FrictionLaw",
-           "Coulomb", "Jenkins", "NoFriction", "coordinate_name"]
+           "Coulomb", "Jenkins", "NoFriction", "Iwan", "coordinate_name"]

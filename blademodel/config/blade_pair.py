@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import math
-from typing import Literal, Optional
+from typing import Any, Literal, Optional
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from ..components import Contact, Coulomb, Damper, HarmonicForce, Jenkins, Mass, NoFriction, Param, Spring
+from ..components import Contact, Damper, HarmonicForce, Mass, Param, Spring
+from ..components.friction import registry
 from ..model import Model
+from .errors import FieldError
 
 FiniteFloat = float
 
@@ -33,6 +35,15 @@ class BladePair(_Strict):
     Defaults are the paper's Table 1 with the base case of section 3.1.3
     (``gap = 4e-5`` m, ``gamma = 4``, ``F0 = 60`` N). SI units, angles in radians.
     ``k = gamma * kx`` (or ``gamma * ky`` with ``gamma_reference="ky"``).
+
+    ``friction`` is any registered law name (``coulomb``, ``bilinear``, ``none``,
+    ``iwan``, or one registered by another package under the
+    ``blademodel.friction_laws`` entry points) or an import path
+    ``"package.module:ClassName"``. The pair passes its own ``mu`` and ``kd`` (as the
+    shared symbols ``mu``, ``kd``) to a law whose constructor takes them;
+    ``friction_options`` holds the law's other keyword arguments, e.g.
+    ``friction: iwan, friction_options: {elements: 8}``, checked by the law's
+    constructor.
     """
 
     model: Literal["blade_pair"] = "blade_pair"
@@ -51,7 +62,9 @@ class BladePair(_Strict):
     F0: float = Field(60.0, ge=0, description="excitation amplitude, N")
     gap: float = Field(4e-5, description="initial shroud gap Delta, m (< 0: preload)")
     gamma: float = Field(4.0, ge=0, description="contact stiffness ratio k / kx")
-    friction: Literal["coulomb", "bilinear", "none"] = "coulomb"
+    friction: str = Field("coulomb", description="friction law: a registered name or 'package.module:Class'")
+    friction_options: dict[str, Any] = Field(
+        default_factory=dict, description="the friction law's own keyword arguments (besides mu, kd)")
     gamma_reference: Literal["kx", "ky"] = Field("kx", description="stiffness that gamma multiplies")
     stick: Literal["exact", "band"] = Field("exact", description="Coulomb stick treatment")
     stick_velocity_tol: float = Field(1e-4, gt=0, description="band half-width, m/s (stick='band')")
@@ -60,10 +73,25 @@ class BladePair(_Strict):
     blade1: Optional[BladeValues] = None
     blade2: Optional[BladeValues] = None
 
+    @field_validator("friction")
+    @classmethod
+    def _known_law(cls, v: str) -> str:
+        return registry.check_name(v)
+
     @model_validator(mode="after")
     def _check(self):
         if self.stick == "band" and self.friction != "coulomb":
             raise ValueError(f"stick='band' applies to friction='coulomb' only, not {self.friction!r}")
+        for key, value in self.friction_options.items():
+            if key in type(self).model_fields:
+                raise FieldError(("friction_options", key), value,
+                                 f"{key!r} is a field of the pair; set it there, not in friction_options")
+        try:
+            self.friction_law()
+        except registry.LawOptionError as e:
+            loc = ("friction_options", e.key) if e.key in self.friction_options else ("friction_options",)
+            value = self.friction_options.get(e.key) if len(loc) == 2 else None
+            raise FieldError(loc, value, f"{self.friction}: {e.reason.removeprefix('friction: ')}") from None
         if self.equations == "eq11_as_printed" and (self.blade1 or self.blade2):
             raise ValueError("equations='eq11_as_printed' is defined for the symmetric pair (no blade1/blade2)")
         return self
@@ -99,12 +127,19 @@ class BladePair(_Strict):
         return lambda i: Param(f"{name}{i}" if differs else name, self.blade_value(i, name))
 
     def friction_law(self):
-        if self.friction == "coulomb":
-            tol = self.stick_velocity_tol if self.stick == "band" else 0.0
-            return Coulomb(mu=Param("mu", self.mu), stick_velocity_tol=Param("v_tol", tol) if tol else 0.0)
-        if self.friction == "bilinear":
-            return Jenkins(mu=Param("mu", self.mu), kd=Param("kd", self.kd))
-        return NoFriction()
+        """The friction law of the contact: ``friction`` built with ``mu``, ``kd`` and ``friction_options``.
+
+        Raises
+        ------
+        registry.LawOptionError
+            If the law rejects an option (its key is named when it can be told).
+        """
+        cls = registry.law_class(self.friction)
+        accepted, _ = registry.accepted_options(cls)
+        shared = {name: Param(name, getattr(self, name)) for name in ("mu", "kd") if name in accepted}
+        if self.friction == "coulomb" and self.stick == "band":
+            shared["stick_velocity_tol"] = Param("v_tol", self.stick_velocity_tol)
+        return registry.make_law(cls, {**shared, **self.friction_options})
 
     def build(self, *, contact: bool = True) -> Model:
         """The components of the pair as a :class:`~blademodel.model.Model`.

@@ -1,30 +1,32 @@
 """The ``friction:`` block of a contact in the component-list format.
 
-``law`` selects the friction law. A built-in name (``coulomb``, ``bilinear``,
-``none``) has its own fixed set of keys; any other value must be the import path
-of a :class:`~blademodel.components.friction.base.FrictionLaw` subclass,
-``"package.module:ClassName"``, and the remaining keys are passed to it as
-keyword arguments (a string value naming a declared parameter is passed as that
-:class:`~blademodel.components.Param`). A new built-in law is one more spec class
-here and one more entry in :data:`BUILTIN_LAWS`.
+``law`` selects the friction law. ``coulomb``, ``bilinear`` and ``none`` have
+their own fixed set of keys (:data:`BUILTIN_LAWS`). Any other value is a law
+name of the registry (:mod:`blademodel.components.friction.registry`: ``iwan``,
+or a name another package registers under the ``blademodel.friction_laws``
+entry-point group) or the import path of a
+:class:`~blademodel.components.friction.base.FrictionLaw` subclass,
+``"package.module:ClassName"``; the remaining keys are passed to its constructor
+as keyword arguments (a string value naming a declared parameter is passed as
+that :class:`~blademodel.components.Param`)::
+
+    friction: {law: iwan, mu: 0.5, kd: 1e6, elements: 8}
+    friction: {law: "mypackage.friction:Dahl", mu: mu, sigma0: 1e7}
 """
 
 from __future__ import annotations
 
-import importlib
-import re
 from typing import Annotated, Callable, Literal, Optional, Union
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Discriminator, Tag, field_validator
 
 from ..components import Coulomb, FrictionLaw, Jenkins, NoFriction, Param
+from ..components.friction import registry
 from .values import number
 
 #: ``resolve(value, default_name)``: a plain number (named ``default_name`` if given)
 #: or the declared parameter a string names.
 Resolver = Callable[[Union[float, str], Optional[str]], Union[float, Param]]
-
-_IMPORT_PATH = re.compile(r"^[A-Za-z_][\w]*(\.[A-Za-z_][\w]*)*:[A-Za-z_][\w]*$")
 
 
 class _Spec(BaseModel):
@@ -71,30 +73,19 @@ class NoFrictionSpec(_Spec):
 
 
 def import_law(path: str) -> type:
-    """The :class:`FrictionLaw` subclass at ``"package.module:ClassName"``.
+    """The :class:`FrictionLaw` subclass of a registered law name or ``"package.module:ClassName"``.
 
     Raises
     ------
     ValueError
-        If ``path`` is malformed, cannot be imported or is not a FrictionLaw subclass.
+        If ``path`` is neither a known name nor an importable FrictionLaw subclass;
+        the message lists the known names.
     """
-    if not _IMPORT_PATH.match(path):
-        raise ValueError(f"unknown friction law {path!r}: expected one of {', '.join(BUILTIN_LAWS)} "
-                         f"or an import path 'package.module:ClassName'")
-    module, _, name = path.partition(":")
-    try:
-        cls = getattr(importlib.import_module(module), name)
-    except ImportError as e:
-        raise ValueError(f"cannot import friction law {path!r}: {e}") from None
-    except AttributeError:
-        raise ValueError(f"cannot import friction law {path!r}: module {module!r} has no {name!r}") from None
-    if not (isinstance(cls, type) and issubclass(cls, FrictionLaw)):
-        raise ValueError(f"{path!r} is not a FrictionLaw subclass")
-    return cls
+    return registry.law_class(path)
 
 
 class ExternalLawSpec(BaseModel):
-    """A friction law given by import path; other keys are its keyword arguments."""
+    """A law by registered name or import path; the other keys are its keyword arguments."""
 
     model_config = ConfigDict(extra="allow", allow_inf_nan=False)
 
@@ -108,7 +99,7 @@ class ExternalLawSpec(BaseModel):
 
     def build(self, resolve: Resolver, contact: str) -> FrictionLaw:
         kwargs = {k: resolve(v, None) if isinstance(v, str) else v for k, v in (self.model_extra or {}).items()}
-        return import_law(self.law)(**kwargs)
+        return registry.make_law(import_law(self.law), kwargs)
 
 
 BUILTIN_LAWS = {"coulomb": CoulombSpec, "bilinear": BilinearSpec, "none": NoFrictionSpec}

@@ -36,6 +36,10 @@ def points(study: Study) -> tuple[list[str], list[list[float]], list[str], list[
             over = {f: v for f, v in zip(fields, combo) if not np.isnan(v)}
             if study.laws:
                 over["friction"] = law
+                if law in (study.law_options or {}):
+                    over["friction_options"] = study.law_options[law]
+                elif study.base.get("friction_options") and law != study.base.get("friction", "coulomb"):
+                    over["friction_options"] = {}   # the base's options belong to the base's law
             values.append(combo)
             law_of.append(law)
             overrides.append(over)

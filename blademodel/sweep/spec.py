@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Literal, Optional
+from typing import Any, Literal, Optional
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from ..components.friction import registry
 
 
 class _Strict(BaseModel):
@@ -68,6 +70,12 @@ class Study(_Strict):
         One or two swept config fields (nested names with dots).
     laws : list of str, optional
         Friction laws to run (an extra ``law`` dimension); default: the base's.
+        Any registered law name (``coulomb``, ``bilinear``, ``none``, ``iwan``,
+        entry points of ``blademodel.friction_laws``); the name labels the law's
+        points in the result file.
+    law_options : dict of str to dict, optional
+        Per law of ``laws``, the ``friction_options`` of its points
+        (``{iwan: {elements: 8}}``); a law not listed runs with its defaults.
     cases : list of dict
         Single points to show as four-panel case figures instead of a sweep.
     plot : str
@@ -81,15 +89,32 @@ class Study(_Strict):
     paper: str = Field("", description="what the paper reports for this figure")
     base: dict = Field(default_factory=dict)
     sweep: dict[str, Axis] = Field(default_factory=dict)
-    laws: Optional[list[Literal["coulomb", "bilinear", "none"]]] = None
+    laws: Optional[list[str]] = None
+    law_options: Optional[dict[str, dict[str, Any]]] = None
     cases: list[dict] = Field(default_factory=list)
     run: RunSettings = Field(default_factory=RunSettings)
     plot: Literal["bifurcation", "reduction", "map", "cases"] = "bifurcation"
     quick: dict = Field(default_factory=lambda: {"num": 8, "transient": 40, "periods": 16})
     source: Optional[str] = Field(None, exclude=True)
 
+    @field_validator("laws")
+    @classmethod
+    def _known_laws(cls, v):
+        from .storage import LAW_CHARS
+        for name in v or []:
+            registry.check_name(name)
+            if len(name.encode()) > LAW_CHARS:
+                raise ValueError(f"law label {name!r} is longer than {LAW_CHARS} characters; register the law "
+                                 f"under a short name (entry point group {registry.ENTRY_POINT_GROUP!r})")
+        if v is not None and len(set(v)) != len(v):
+            raise ValueError(f"laws {v} repeat a law")
+        return v
+
     @model_validator(mode="after")
     def _check(self):
+        for law in self.law_options or {}:
+            if law not in (self.laws or []):
+                raise ValueError(f"law_options names {law!r}, which is not among laws {self.laws}")
         if not self.sweep and not self.cases:
             raise ValueError("a study needs a sweep or cases")
         if len(self.sweep) > 2:

@@ -35,6 +35,8 @@ def study_signature(study_json: str) -> str:
     d = json.loads(study_json)
     for k in ("title", "paper", "plot"):
         d.pop(k, None)
+    if not d.get("law_options"):
+        d.pop("law_options", None)   # files written before law_options existed still resume
     return json.dumps(d, sort_keys=True)
 
 

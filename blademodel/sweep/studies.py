@@ -21,8 +21,9 @@ def studies_dir() -> Path:
 
 
 def paper_figures() -> dict[str, Path]:
-    """``{"fig05": path, ...}`` for every paper figure study."""
-    return {p.stem: p for p in sorted(studies_dir().glob("fig*.yaml"))}
+    """``{"fig05": path, ...}`` for every paper figure study (``figNN.yaml``; not extensions
+    such as ``fig17_iwan.yaml``)."""
+    return {p.stem: p for p in sorted(studies_dir().glob("fig*.yaml")) if p.stem[3:].isdigit()}
 
 
 def summarize(ds) -> list[dict]:

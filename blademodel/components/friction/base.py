@@ -7,11 +7,43 @@ ends) and what follows a guard (candidate next modes with their resets).
 
 Everything is written with SymPy in terms of a :class:`ContactContext`, which the
 symbolic layer fills for each contact. The hybrid solver is generic: it never
-knows which law it integrates.
+knows which law it integrates. A law is one subclass of :class:`FrictionLaw`;
+nothing else changes to add one, inside the package or outside it
+(``docs/friction_laws.md`` walks through one; laws are found by name through
+:mod:`blademodel.components.friction.registry`).
 
 Sign convention shared by every law: the friction force ``f`` acts on the first
 body of the contact along ``-r`` and on the second along ``+r``, so its power on
 the system is ``-f v`` with ``v = dr1/dt - dr2/dt``.
+
+What the solver does with a law (the contract a law relies on):
+
+* **Modes.** The global modes are the product of every contact's modes
+  (``"open"`` plus the law's :attr:`FrictionLaw.modes`), each derived and compiled
+  ahead of time, so a law keeps its modes few. Discrete internal states that would
+  multiply the modes (the stick/slip flags of many elements) are better held as
+  continuous states with zero rate that only resets change (see
+  :class:`~blademodel.components.friction.iwan.Iwan`).
+* **Expressions** may use the context's symbols, numbers, the usual elementary
+  functions, ``Abs``, ``Min``/``Max`` and ``Piecewise`` (printed as Python
+  conditional expressions, which the compiled kernel supports). The solver's
+  stability check takes each mode's Jacobian at rest (every state zero), so a
+  ``Piecewise`` branch chosen by a state is taken at its value zero there.
+* **Events.** After every RK4 step each guard of the mode is compared with its
+  value at the step start; a crossing in the guard's ``direction`` is located by
+  bisection and the state is taken just *past* the root (so the guard cannot fire
+  again at once). Then the guard's candidates are tried and its reset applied,
+  and every guard is evaluated afresh, in the new mode, from the new state.
+* **One guard per event.** If several guards cross within the same located
+  bracket, only one fires (the first in the mode's guard order); the others are
+  already past zero afterwards and are never seen to cross. A law whose switches
+  can coincide (several elements switching in one instant) must settle all of
+  them in the reset of the guard that fires.
+* **Resets** are evaluated on the state before the reset (values past the root);
+  candidate conditions are evaluated in the candidate mode on the state after it.
+* **Compiled code is cached** per model :meth:`~FrictionLaw.structure` and per
+  source of the law's class: a law whose constructor options change its
+  expressions (not just parameter values) must say so in ``structure()``.
 """
 
 from __future__ import annotations
@@ -118,8 +150,15 @@ class Guard:
 class FrictionLaw(ABC):
     """Base class of friction laws; subclass it to add a law.
 
-    Subclasses set :attr:`modes` and :attr:`states` and implement the abstract
-    methods. Nothing outside the subclass's own file has to change.
+    Subclasses set :attr:`modes` and :attr:`states` (class attributes, or instance
+    attributes set by the constructor when they depend on its options) and
+    implement the abstract methods. Nothing outside the subclass's own file has to
+    change. The built-in laws are frozen dataclasses whose fields are the
+    constructor's keyword arguments: numbers or :class:`~blademodel.components.parameter.Param`
+    (checked with :func:`~blademodel.components.parameter.as_param`, whose errors name the field as
+    ``"friction: <field> = <value> ..."``) and structural options; the config
+    layer passes ``friction_options`` and the keys of a YAML ``friction:`` block
+    to the constructor by name and reports a rejected one at its field.
 
     Attributes
     ----------
@@ -167,7 +206,10 @@ class FrictionLaw(ABC):
     def structure(self) -> tuple:
         """What fixes the generated code: class and structural options, no values.
 
-        Two laws with equal ``structure()`` share a compiled kernel.
+        Two laws with equal ``structure()`` share a compiled kernel. The default
+        covers the class, modes, states and parameter symbol names; override it
+        (extending ``super().structure()``) if other options shape the
+        expressions, e.g. numeric constants written into them.
         """
         cls = type(self)
         return (f"{cls.__module__}:{cls.__qualname__}", self.modes, self.states,
