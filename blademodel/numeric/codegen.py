@@ -251,6 +251,8 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
     L.append(f"N_GUARDS = np.array({[len(g) for g in guards]}, dtype=np.int64)")
     L.append(f"GUARD_DIR = np.array({dirs}, dtype=np.int64).reshape({n_modes}, {max_g})")
     L.append(f"CLOSE_GUARD = np.array({close}, dtype=np.int64).reshape({n_modes}, {max(n_contacts, 1)})")
+    owner = [[g.contact for g in m.guards] + [-1] * (max_g - len(m.guards)) for m in system.modes]
+    L.append(f"GUARD_CONTACT = np.array({owner}, dtype=np.int64).reshape({n_modes}, {max_g})")
     L.append(f"OPEN_MODE = {system.open_mode}")
     L.append("")
 
@@ -261,7 +263,8 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
     full_state = list(state) + [sp.Symbol(f"_energy_{i}") for i in range(n_state - len(state))]
     L += fused_rk4_source(flow_cses, full_state, t, {**pnames, **const_names})
     L.append("")
-    for fn in ("rhs", "guards", "transition", "rk4_step", "crossed", "first_crossing", "initial_mode",
+    for fn in ("rhs", "guards", "transition", "rk4_step", "crossed", "first_crossing", "simultaneous_crossing",
+               "initial_mode",
                "integrate"):
         L.append(f"{fn} = njit(cache=True)({fn})")
 

@@ -64,6 +64,21 @@ def first_crossing(mode, g0, g1):
     return -1
 
 
+def simultaneous_crossing(mode, contact, gs, ge):
+    """First guard of ``mode`` owned by another contact than ``contact`` that crossed.
+
+    ``gs`` and ``ge`` are the guards at the sub-step start and at an event just
+    handled. A transition settles its own contact (its law's candidates and
+    resets); a guard of another contact that lay before its root at the sub-step
+    start and lies past it now crossed within the same bracket and must fire too,
+    or it would stay dormant past its root.
+    """
+    for i in range(N_GUARDS[mode]):  # noqa: F821
+        if GUARD_CONTACT[mode, i] != contact and crossed(gs[i], ge[i], GUARD_DIR[mode, i]):  # noqa: F821
+            return i
+    return -1
+
+
 def initial_mode(t, y, p, g, ytmp):
     """Mode of the state ``y``: every contact with ``delta >= 0`` is closed.
 
@@ -109,6 +124,7 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
     y1 = np.empty(n)
     ymid = np.empty(n)
     ytmp = np.empty(n)
+    ysub = np.empty(n)
     ng = GUARD_DIR.shape[1] + 1  # noqa: F821
     g0 = np.empty(ng)
     g1 = np.empty(ng)
@@ -161,25 +177,33 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
                     else:
                         lo = mid
                 gi = first_crossing(mode, g0, g1)
+                t_sub = t
+                for i in range(n):
+                    ysub[i] = y[i]
                 t = t_end if hi == 1.0 else t + hi * dt
                 for i in range(n):
                     y[i] = y1[i]
-                new_mode = transition(mode, gi, t, y, p, ytmp)  # noqa: F821
+                while gi >= 0:
+                    owner = GUARD_CONTACT[mode, gi]  # noqa: F821
+                    new_mode = transition(mode, gi, t, y, p, ytmp)  # noqa: F821
+                    if recording:
+                        k = counters[C_LOGGED]
+                        if k < max_log:
+                            log_t[k] = t
+                            log_guard[k] = gi
+                            log_from[k] = mode
+                            log_to[k] = new_mode
+                        counters[C_LOGGED] += 1
+                    counters[C_EVENTS] += 1
+                    mode = new_mode
+                    n_events += 1
+                    if n_events > max_events:
+                        counters[C_RECORDS] = irec
+                        return STATUS_EVENT_STORM, mode, t
+                    guards(mode, t_sub, ysub, p, gm)  # noqa: F821
+                    guards(mode, t, y, p, g1)  # noqa: F821
+                    gi = simultaneous_crossing(mode, owner, gm, g1)
                 g0_valid = False
-                if recording:
-                    k = counters[C_LOGGED]
-                    if k < max_log:
-                        log_t[k] = t
-                        log_guard[k] = gi
-                        log_from[k] = mode
-                        log_to[k] = new_mode
-                    counters[C_LOGGED] += 1
-                counters[C_EVENTS] += 1
-                mode = new_mode
-                n_events += 1
-                if n_events > max_events:
-                    counters[C_RECORDS] = irec
-                    return STATUS_EVENT_STORM, mode, t
             counters[C_STEPS] += 1
             for i in range(n):
                 if not math.isfinite(y[i]):
