@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import sympy as sp
+from ._sympy import sp
 
 from .friction.base import FrictionLaw
 from .friction.none import NoFriction

@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 from typing import Union
 
-import sympy as sp
+from ._sympy import sp
 
 
 @dataclass(frozen=True)

@@ -52,7 +52,7 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
-import sympy as sp
+from .._sympy import sp
 
 from ..parameter import Param
 
@@ -120,7 +120,7 @@ class Candidate:
     """
 
     mode: str
-    when: sp.Basic = sp.true
+    when: sp.Basic = field(default_factory=lambda: sp.true)
     reset: Mapping[str, sp.Expr] = field(default_factory=dict)
 
 

@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Optional, Sequence
 
-import sympy as sp
+from .._sympy import sp
 
 from ..parameter import Number, as_param
 from .base import Candidate, ContactContext, FrictionLaw, Guard

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import sympy as sp
+from .._sympy import sp
 
 from ..parameter import Number, as_param
 from .base import Candidate, ContactContext, FrictionLaw, Guard

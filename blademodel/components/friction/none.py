@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import sympy as sp
+from .._sympy import sp
 
 from .base import ContactContext, FrictionLaw
 
