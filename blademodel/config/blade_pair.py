@@ -12,7 +12,6 @@ from ..components.friction import registry
 from ..model import Model
 from .errors import FieldError
 
-FiniteFloat = float
 
 
 class _Strict(BaseModel):
