@@ -10,7 +10,6 @@ from ..model import Model
 from .compiled import compile_model
 from .stability import check_step, max_stable_step
 
-STATUS_MESSAGES = {0: "done", 1: "non-finite state", 2: "event storm"}
 
 
 def excitation_period(model: Model) -> float:
