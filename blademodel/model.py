@@ -67,6 +67,15 @@ class Model:
         return (*self.masses, *self.springs, *self.dampers, *self.forces, *self.contacts)
 
     @property
+    def length_scale(self) -> float | None:
+        """Scale of non-dimensional displacements, ``X1 = x1 / gap``: the first contact's gap.
+
+        ``None`` without contacts or with a zero gap (then outputs stay in metres).
+        """
+        gap = self.contacts[0].parameters()["gap"].value if self.contacts else 0.0
+        return gap or None
+
+    @property
     def coordinates(self) -> tuple[str, ...]:
         """Coordinate names in state order (mass by mass, ``x`` before ``y``)."""
         return tuple(c for m in self.masses for c in m.coordinates)

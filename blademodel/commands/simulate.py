@@ -12,7 +12,7 @@ from ..analysis import mean_square, periodicity_label, vibration_reduction
 from ..numeric.mean_square import mean_square_run, without_contacts
 from ..config import apply_overrides, load_config
 from ..numeric import SimulationError, simulate
-from .common import parse_overrides
+from .common import add_model_arguments, parse_overrides
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -20,9 +20,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser("simulate", help="integrate a model from rest",
                               description="Start at rest, discard M excitation periods, record N, "
                                           "and report periodicity, Poincare samples and counters.")
-    p.add_argument("model", metavar="MODEL.yaml")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
-                   help="override a config field (repeatable)")
+    add_model_arguments(p)
     p.add_argument("--transient", type=int, default=200, metavar="M", help="periods discarded (default 200)")
     p.add_argument("--periods", type=int, default=100, metavar="N", help="periods recorded (default 100)")
     p.add_argument("--steps-per-period", type=int, default=1000, metavar="S",
@@ -39,13 +37,6 @@ def _progress(done: int, total: int) -> None:
     if sys.stderr.isatty():
         bar = "#" * int(30 * done / total)
         print(f"\r[{bar:<30}] {done}/{total} periods", end="" if done < total else "\n", file=sys.stderr)
-
-
-def _length_scale(config, model) -> float | None:
-    gap = getattr(config, "gap", None)
-    if gap is None and model.contacts:
-        gap = model.contacts[0].parameters()["gap"].value
-    return gap if gap else None
 
 
 def _vibration_reduction(model, result, args) -> float | None:
@@ -86,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = simulate(model, periods=args.periods, transient=args.transient,
                           steps_per_period=args.steps_per_period, event_tol=args.event_tol,
-                          length_scale=_length_scale(config, model), progress=_progress, record_every=1)
+                          length_scale=model.length_scale, progress=_progress, record_every=1)
     except SimulationError as e:
         print(f"error: {e}", file=sys.stderr)
         return 1

@@ -30,13 +30,6 @@ def build_config(base: dict, overrides: dict):
     return apply_overrides(config_from_data(dict(base), source="study base"), overrides, source="sweep")
 
 
-def _length_scale(cfg, model) -> float:
-    gap = getattr(cfg, "gap", None)
-    if gap is None and model.contacts:
-        gap = model.contacts[0].parameters()["gap"].value
-    return float(gap) if gap else float("nan")
-
-
 _P0_MEMO: dict = {}
 
 
@@ -99,7 +92,7 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
         names = integ.state_names
         ix, iv = names.index("x1") if "x1" in names else 0, names.index("vx1") if "vx1" in names else 0
         n_phys = len(model.coordinates) * 2
-        scale_len = _length_scale(cfg, model)
+        scale_len = model.length_scale or float("nan")
         out = {"poincare_x1": poinc[:, ix].copy(), "poincare_vx1": poinc[:, iv].copy(),
                "length_scale": scale_len, "period": poincare_period(poinc[:, :n_phys]),
                "events": int(counters[1]), "final_state": y.copy()}

@@ -14,22 +14,14 @@ from pathlib import Path
 
 import numpy as np
 
-from blademodel.analysis import motion_class
 from blademodel.sweep import open_result
+from blademodel.sweep.point import motion_label
 
 
 def _labels(ds) -> list[str]:
-    """Motion class of every point, from its stored period and Lyapunov exponent."""
-    out = []
-    for period, lam, err, done in zip(ds["period"].values, ds["lyapunov"].values, ds["error"].values,
-                                      ds["done"].values):
-        if err:
-            out.append("failed")
-        elif not done:
-            out.append("?")
-        else:
-            out.append(motion_class(int(period), None if np.isnan(lam) else float(lam)))
-    return out
+    """Motion class of every point (``open_result`` derives it from the stored period and exponent)."""
+    return ["failed" if err else "?" if not done else motion_label(int(code))
+            for code, err, done in zip(ds["motion"].values, ds["error"].values, ds["done"].values)]
 
 
 def intervals(ds) -> str:
