@@ -10,7 +10,8 @@ from ..model import Model
 
 def add_model_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the ``MODEL.yaml`` positional argument and repeatable ``--set NAME=VALUE``."""
-    parser.add_argument("model", metavar="MODEL.yaml", help="model config (blade_pair or components format)")
+    parser.add_argument("model", metavar="MODEL.yaml",
+                        help="model config (blade_pair, bladed_disk or components format)")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
                         help="override a config field, e.g. --set gamma=5 or --set contacts.0.gap=1e-5 "
                              "(repeatable)")

@@ -10,7 +10,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from ..components import Contact, Damper, HarmonicForce, Mass, Param, Spring
 from ..components.friction import registry
 from ..model import Model
-from .errors import FieldError
+from .friction_law import check_friction_options, make_friction_law
 
 
 
@@ -81,16 +81,8 @@ class BladePair(_Strict):
     def _check(self):
         if self.stick == "band" and self.friction != "coulomb":
             raise ValueError(f"stick='band' applies to friction='coulomb' only, not {self.friction!r}")
-        for key, value in self.friction_options.items():
-            if key in type(self).model_fields:
-                raise FieldError(("friction_options", key), value,
-                                 f"{key!r} is a field of the pair; set it there, not in friction_options")
-        try:
-            self.friction_law()
-        except registry.LawOptionError as e:
-            loc = ("friction_options", e.key) if e.key in self.friction_options else ("friction_options",)
-            value = self.friction_options.get(e.key) if len(loc) == 2 else None
-            raise FieldError(loc, value, f"{self.friction}: {e.reason.removeprefix('friction: ')}") from None
+        check_friction_options(self.friction_law, self.friction, self.friction_options, type(self).model_fields,
+                               owner="pair")
         if self.equations == "eq11_as_printed" and (self.blade1 or self.blade2):
             raise ValueError("equations='eq11_as_printed' is defined for the symmetric pair (no blade1/blade2)")
         return self
@@ -133,12 +125,11 @@ class BladePair(_Strict):
         registry.LawOptionError
             If the law rejects an option (its key is named when it can be told).
         """
-        cls = registry.law_class(self.friction)
-        accepted, _ = registry.accepted_options(cls)
-        shared = {name: Param(name, getattr(self, name)) for name in ("mu", "kd") if name in accepted}
+        forced = {}
         if self.friction == "coulomb" and self.stick == "band":
-            shared["stick_velocity_tol"] = Param("v_tol", self.stick_velocity_tol)
-        return registry.make_law(cls, {**shared, **self.friction_options})
+            forced["stick_velocity_tol"] = Param("v_tol", self.stick_velocity_tol)
+        return make_friction_law(self.friction, self.friction_options,
+                                 {name: Param(name, getattr(self, name)) for name in ("mu", "kd")}, forced)
 
     def build(self, *, contact: bool = True) -> Model:
         """The components of the pair as a :class:`~blademodel.model.Model`.

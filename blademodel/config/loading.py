@@ -1,9 +1,10 @@
 """Read a model config from YAML, with errors that point at the file and line.
 
 The ``model:`` key selects the format: ``blade_pair`` (:class:`BladePair`, the
-paper's pair with Table 1 defaults) or ``components`` (:class:`ComponentsModel`,
-a list of components). A validation error names the file, the line, the field
-path and the value::
+paper's pair with Table 1 defaults), ``components`` (:class:`ComponentsModel`, a
+list of components) or ``bladed_disk`` (:class:`BladedDisk`, a ring of the
+paper's blades). A validation error names the file, the line, the field path and
+the value::
 
     models/x.yaml:7: masses.0.m = -1.0: Input should be greater than 0
 
@@ -21,13 +22,14 @@ from pydantic import ValidationError
 
 from ..model import Model
 from .blade_pair import BladePair
+from .bladed_disk import BladedDisk
 from .components_format import ComponentsModel
 from .errors import ConfigError, FieldError, format_loc, format_value
 
-Config = Union[BladePair, ComponentsModel]
+Config = Union[BladePair, ComponentsModel, BladedDisk]
 
 #: Config classes by the value of the ``model:`` key.
-FORMATS: dict[str, type] = {"blade_pair": BladePair, "components": ComponentsModel}
+FORMATS: dict[str, type] = {"blade_pair": BladePair, "components": ComponentsModel, "bladed_disk": BladedDisk}
 
 
 # --- locating errors -------------------------------------------------------------------
@@ -197,7 +199,7 @@ def load_config(path: Union[str, Path]) -> Config:
 
     Returns
     -------
-    BladePair or ComponentsModel
+    BladePair, BladedDisk or ComponentsModel
         Selected by the file's ``model:`` key.
 
     Raises
@@ -227,6 +229,8 @@ def _set_path(data: dict, name: str, value: Any, source: str):
         last = i == len(parts) - 1
         here = ".".join(parts[:i + 1])
         if isinstance(cur, dict):
+            if part not in cur and part.lstrip("-").isdigit() and int(part) in cur:
+                part = int(part)  # a mapping keyed by index (a disk's contacts)
             if part not in cur and (cur or not last):
                 known = ", ".join(map(str, cur)) or "none"
                 raise ConfigError(f"{source} {name}: unknown field {here!r} (known: {known})", path=source)
@@ -256,7 +260,7 @@ def apply_overrides(config: Config, overrides: Mapping[str, Any], *, source: str
 
     Parameters
     ----------
-    config : BladePair or ComponentsModel
+    config : BladePair, BladedDisk or ComponentsModel
     overrides : mapping of str to object
         Dotted field paths (``gamma``, ``blade1.m``, ``contacts.0.gap``) to values;
         strings are read as YAML scalars (``"5"`` -> 5, ``"1e5"`` is converted by

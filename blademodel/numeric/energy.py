@@ -50,10 +50,17 @@ def energy_balance(model: Model, result: SimulationResult) -> dict:
     """
     if "W_in" not in result.state_names:
         raise ValueError("the result has no energy accumulators: simulate with energy=True")
-    E = energy_function(model)
-    p = np.array([model.parameters[n] for n in result.params], dtype=float)
     y0, y1 = result.y[0], result.final_state
-    dE = E(result.final_mode, y1, p) - E(int(result.mode[0]), y0, p)
+    if result.settings.get("kernel") == "contact":
+        from .contact_kernel import ContactIntegrator
+        integ = ContactIntegrator(model, steps_per_period=result.steps_per_period, period=result.period,
+                                  check_stability=False, energy=True)
+        dE = (integ.mechanical_energy(y1, result.final_contact_modes)
+              - integ.mechanical_energy(y0, result.contacts["modes"][0]))
+    else:
+        E = energy_function(model)
+        p = np.array([model.parameters[n] for n in result.params], dtype=float)
+        dE = E(result.final_mode, y1, p) - E(int(result.mode[0]), y0, p)
     W, Dv, Df = (y1[result.index(k)] - y0[result.index(k)] for k in ("W_in", "D_visc", "D_fric"))
     residual = dE - (W - Dv - Df)
     return {"dE": dE, "W_in": W, "D_visc": Dv, "D_fric": Df, "residual": residual,

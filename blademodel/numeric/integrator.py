@@ -8,6 +8,7 @@ import numpy as np
 
 from ..model import Model
 from .compiled import compile_model
+from .contract import N_COUNTERS
 from .stability import check_step, max_stable_step
 
 
@@ -19,6 +20,31 @@ def excitation_period(model: Model) -> float:
         raise ValueError(f"the forces have {len(omegas)} distinct frequencies {sorted(omegas)}; "
                          "give the period explicitly")
     return 2 * math.pi / omegas.pop()
+
+
+def check_settings(steps_per_period, event_tol, max_events_per_step) -> None:
+    """Validate the settings every kernel shares; raise ``ValueError`` naming the bad one."""
+    for name, value in (("steps_per_period", steps_per_period), ("max_events_per_step", max_events_per_step)):
+        if int(value) != value or value < 1:
+            raise ValueError(f"{name} = {value!r} must be an integer >= 1")
+    if not (event_tol > 0 and math.isfinite(event_tol)):
+        raise ValueError(f"event_tol = {event_tol!r} must be a positive number")
+
+
+def state_vector(names: list, n_state: int, y0=None) -> np.ndarray:
+    """State vector from ``y0`` (array or ``{name: value}``); default rest."""
+    y = np.zeros(n_state)
+    if y0 is None:
+        return y
+    if isinstance(y0, dict):
+        for k, v in y0.items():
+            if k not in names:
+                raise KeyError(f"y0 names unknown state {k!r}; states are {names}")
+            y[names.index(k)] = v
+    else:
+        y0 = np.asarray(y0, dtype=float)
+        y[: y0.size] = y0
+    return y
 
 
 class HybridIntegrator:
@@ -49,11 +75,7 @@ class HybridIntegrator:
     def __init__(self, model: Model, *, steps_per_period: int = 1000, event_tol: float = 1e-10,
                  max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
                  check_stability: bool = True):
-        for name, value in (("steps_per_period", steps_per_period), ("max_events_per_step", max_events_per_step)):
-            if int(value) != value or value < 1:
-                raise ValueError(f"{name} = {value!r} must be an integer >= 1")
-        if not (event_tol > 0 and math.isfinite(event_tol)):
-            raise ValueError(f"event_tol = {event_tol!r} must be a positive number")
+        check_settings(steps_per_period, event_tol, max_events_per_step)
         self.model = model
         self.period = excitation_period(model) if period is None else float(period)
         self.steps_per_period = int(steps_per_period)
@@ -86,18 +108,11 @@ class HybridIntegrator:
 
     def initial_state(self, y0=None) -> np.ndarray:
         """State vector from ``y0`` (array or ``{name: value}``); default rest."""
-        y = np.zeros(self.n_state)
-        if y0 is None:
-            return y
-        if isinstance(y0, dict):
-            for k, v in y0.items():
-                if k not in self.meta["state"]:
-                    raise KeyError(f"y0 names unknown state {k!r}; states are {self.meta['state']}")
-                y[self.meta["state"].index(k)] = v
-        else:
-            y0 = np.asarray(y0, dtype=float)
-            y[: y0.size] = y0
-        return y
+        return state_vector(self.meta["state"], self.n_state, y0)
+
+    def record_buffer(self, n_records: int) -> tuple:
+        """``(t, y, mode)`` arrays for ``n_records`` records (``advance(record=...)``)."""
+        return np.empty(n_records), np.empty((n_records, self.n_state)), np.empty(n_records, dtype=np.int64)
 
     def mode_of(self, y: np.ndarray, t: float = 0.0) -> int:
         """The mode a state belongs to (closed contacts where ``delta >= 0``).
@@ -135,7 +150,7 @@ class HybridIntegrator:
         status, mode, t : int, int, float
         """
         if counters is None:
-            counters = np.zeros(6, dtype=np.int64)
+            counters = np.zeros(N_COUNTERS, dtype=np.int64)
         rec_t, rec_y, rec_mode = record if record is not None else self._empty_rec
         log_t, log_g, log_f, log_to = log if log is not None else self._empty_log
         if poincare is None:

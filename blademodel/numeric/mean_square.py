@@ -7,7 +7,8 @@ import dataclasses
 import numpy as np
 
 from ..model import Model
-from .integrator import HybridIntegrator
+from .contract import C_RECORDS, N_COUNTERS
+from .kernels import make_integrator
 
 
 def without_contacts(model: Model) -> Model:
@@ -38,7 +39,7 @@ def mean_square_run(model: Model, *, transient: int, periods: int, steps_per_per
         The same value :func:`blademodel.analysis.reduction.mean_square` gives on
         records of the whole window.
     """
-    integ = HybridIntegrator(model, steps_per_period=steps_per_period, event_tol=event_tol)
+    integ = make_integrator(model, steps_per_period=steps_per_period, event_tol=event_tol)
     names = list(names) if names is not None else list(model.masses[0].coordinates)
     cols = [integ.state_names.index(n) for n in names]
     S = integ.steps_per_period
@@ -46,14 +47,14 @@ def mean_square_run(model: Model, *, transient: int, periods: int, steps_per_per
     mode = integ.mode_of(y)
     status, mode, _ = integ.advance(y, mode, 0, transient)
     n = chunk_periods * S + 1
-    rec = (np.empty(n), np.empty((n, integ.n_state)), np.empty(n, dtype=np.int64))
+    rec = integ.record_buffer(n)
     total, count, start = 0.0, 0, transient
     while start < transient + periods and not status:
         end = min(transient + periods, start + chunk_periods)
-        counters = np.zeros(6, dtype=np.int64)
+        counters = np.zeros(N_COUNTERS, dtype=np.int64)
         status, mode, _ = integ.advance(y, mode, start, end, n_transient=transient, record=rec,
                                         counters=counters)
-        k = int(counters[5])
+        k = int(counters[C_RECORDS])
         first = 1 if start == transient else 0  # the window's opening sample is left out
         total += float(np.sum(rec[1][first:k][:, cols] ** 2))
         count += k - first

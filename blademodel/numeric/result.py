@@ -40,8 +40,16 @@ class SimulationResult:
     period : float
         The excitation period ``T`` in s.
     status : int
-        0 done, 1 non-finite state, 2 event storm.
+        A :mod:`blademodel.numeric.contract` status: 0 done, 1 non-finite state,
+        2 event storm, 3 friction problem unresolved.
     message : str
+    contacts : dict or None
+        Per-contact kernel only: ``names``, ``modes`` (records x contacts, each
+        contact's mode index), ``mode_names`` (per contact), and with
+        ``record_forces`` the normal and friction forces ``N`` and ``f`` (records x
+        contacts, N). ``mode``/``mode_names`` then index the combinations met.
+    final_contact_modes : ndarray or None
+        Per-contact kernel: each contact's mode at the end.
     """
 
     t: np.ndarray
@@ -62,6 +70,8 @@ class SimulationResult:
     message: str = "done"
     length_scale: float | None = None
     settings: dict = field(default_factory=dict)
+    contacts: dict | None = None
+    final_contact_modes: np.ndarray | None = None
 
     def index(self, name: str) -> int:
         """Column of state ``name`` (``"x1"``, ``"vx1"``, ``"z"``)."""

@@ -5,11 +5,38 @@ from __future__ import annotations
 
 import numpy as np
 
+import warnings
+
 from ..model import Model
+from .contract import (C_LOGGED, C_RECORDS, COUNTER_NAMES, N_COUNTERS, N_STATS, S_MAX_CONE_RATIO, STAT_NAMES,
+                       STATUS_EVENT_STORM, STATUS_NAMES, STATUS_OK)
 from .integrator import HybridIntegrator, excitation_period  # noqa: F401  (re-exported)
+from .kernels import make_integrator
 from .result import SimulationError, SimulationResult
 
-_COUNTERS = ("steps", "events", "bisections", "rhs_evaluations", "events_logged", "records")
+
+def _contact_labels(integ, rec_cm, final_cm, log, nl):
+    """Mode names of the combinations met, record mode indices, the event log by name."""
+    combos = [tuple(int(x) for x in row) for row in rec_cm]
+    final = tuple(int(x) for x in final_cm)
+    index: dict = {}
+    for c in [*combos, final]:
+        index.setdefault(c, len(index))
+    labels = [integ.mode_label(c) for c in index]
+    mode_idx = np.array([index[c] for c in combos], dtype=np.int64)
+    names, cmodes, cguards = integ.meta["contacts"], integ.meta["contact_modes"], integ.meta["contact_guards"]
+    log_t, log_c, log_g, log_f, log_to = log
+    one = len(names) == 1
+
+    def local(j, m):
+        return cmodes[j][m] if one else f"{names[j]}={cmodes[j][m]}"
+    events = {"t": log_t[:nl].copy(),
+              "contact": [names[j] for j in log_c[:nl]],
+              "guard": [f"{names[j]}: " + (cguards[j][f][g] if g >= 0 else "friction problem")
+                        for j, g, f in zip(log_c[:nl], log_g[:nl], log_f[:nl])],
+              "from": [local(j, m) for j, m in zip(log_c[:nl], log_f[:nl])],
+              "to": [local(j, m) for j, m in zip(log_c[:nl], log_to[:nl])]}
+    return labels, events, mode_idx, index[final]
 
 
 def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_period: int = 1000,
@@ -17,7 +44,7 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
              max_log: int = 200_000, energy: bool = False, y0=None, period: float | None = None,
              check_stability: bool = True, raise_on_error: bool = True,
              length_scale: float | None = None, progress=None, chunk_periods: int = 50,
-             mode0: int | None = None) -> SimulationResult:
+             mode0=None, kernel: str = "auto", record_forces: bool = True) -> SimulationResult:
     """Integrate ``model`` from rest with fixed-step RK4 and located events.
 
     Parameters
@@ -54,9 +81,15 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
     progress : callable, optional
         ``progress(done_periods, total_periods)``, called after every chunk of
         ``chunk_periods`` periods (the run is split without changing its result).
-    mode0 : int, optional
-        Initial mode; by default it follows from ``y0`` (every contact with
-        ``delta >= 0`` closed, the friction law choosing how).
+    mode0 : int or array of int, optional
+        Initial mode (per-contact kernel: one mode per contact); by default it
+        follows from ``y0`` (every contact with ``delta >= 0`` closed, the friction
+        law choosing how).
+    kernel : {"auto", "product", "contact"}
+        See :func:`blademodel.numeric.kernels.choose_kernel`.
+    record_forces : bool
+        Per-contact kernel: record each contact's normal and friction force with
+        every record (``result.contacts["N"]``, ``["f"]``).
 
     Returns
     -------
@@ -65,23 +98,28 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
     for name, value, lo in (("periods", periods, 1), ("transient", transient, 0), ("record_every", record_every, 1)):
         if int(value) != value or value < lo:
             raise ValueError(f"{name} = {value!r} must be an integer >= {lo}")
-    integ = HybridIntegrator(model, steps_per_period=steps_per_period, event_tol=event_tol,
-                             max_events_per_step=max_events_per_step, energy=energy, period=period,
-                             check_stability=check_stability)
+    integ = make_integrator(model, kernel=kernel, steps_per_period=steps_per_period, event_tol=event_tol,
+                            max_events_per_step=max_events_per_step, energy=energy, period=period,
+                            check_stability=check_stability)
+    per_contact = getattr(integ, "kernel", "product") == "contact"
     T, n, meta = integ.period, integ.n_state, integ.meta
     y = integ.initial_state(y0)
-    mode = integ.mode_of(y) if mode0 is None else int(mode0)
+    if mode0 is None:
+        mode = integ.mode_of(y)
+    else:
+        mode = np.asarray(mode0, dtype=np.int64) if per_contact else int(mode0)
 
     n_rec = (periods * steps_per_period) // record_every + 1
     rec_t = np.empty(n_rec)
     rec_y = np.empty((n_rec, n))
-    rec_mode = np.empty(n_rec, dtype=np.int64)
+    nc = len(model.contacts)
+    rec_mode = np.empty((n_rec, nc), dtype=np.int8) if per_contact else np.empty(n_rec, dtype=np.int64)
+    forces = (np.empty((n_rec, nc)), np.empty((n_rec, nc))) if per_contact and record_forces else None
     poincare = np.empty((periods, n))
-    log_t = np.empty(max_log)
-    log_guard = np.empty(max_log, dtype=np.int64)
-    log_from = np.empty(max_log, dtype=np.int64)
-    log_to = np.empty(max_log, dtype=np.int64)
-    counters = np.zeros(6, dtype=np.int64)
+    log = (np.empty(max_log), *(np.empty(max_log, dtype=np.int64) for _ in range(4 if per_contact else 3)))
+    counters = np.zeros(N_COUNTERS, dtype=np.int64)
+    stats = np.zeros(N_STATS)
+    extra = {"forces": forces, "stats": stats} if per_contact else {}
     total = transient + periods
     step = total if progress is None else max(1, int(chunk_periods))
     start, status, t_stop = 0, 0, 0.0
@@ -89,32 +127,49 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
         end = min(total, start + step)
         status, mode, t_stop = integ.advance(y, mode, start, end, n_transient=transient,
                                              record=(rec_t, rec_y, rec_mode), poincare=poincare,
-                                             log=(log_t, log_guard, log_from, log_to), counters=counters,
-                                             record_every=record_every)
+                                             log=log, counters=counters, record_every=record_every, **extra)
         start = end
         if progress is not None:
             progress(start, total)
-    nr = int(counters[5])
-    nl = min(int(counters[4]), max_log)
-    modes, guards = meta["modes"], meta["guards"]
-    events = {"t": log_t[:nl].copy(),
-              "guard": [guards[f][gi] for f, gi in zip(log_from[:nl], log_guard[:nl])],
-              "from": [modes[i] for i in log_from[:nl]],
-              "to": [modes[i] for i in log_to[:nl]]}
+    nr = int(counters[C_RECORDS])
+    nl = min(int(counters[C_LOGGED]), max_log)
+    if per_contact:
+        labels, events, mode_idx, final_idx = _contact_labels(integ, rec_mode[:nr], mode, log, nl)
+        contact = {"names": list(meta["contacts"]), "modes": rec_mode[:nr],
+                   "mode_names": [list(m) for m in meta["contact_modes"]]}
+        if forces is not None:
+            contact.update(N=forces[0][:nr], f=forces[1][:nr])
+        mode_label = labels[final_idx]
+    else:
+        modes, guards = meta["modes"], meta["guards"]
+        log_t, log_guard, log_from, log_to = log
+        events = {"t": log_t[:nl].copy(),
+                  "guard": [guards[f][gi] for f, gi in zip(log_from[:nl], log_guard[:nl])],
+                  "from": [modes[i] for i in log_from[:nl]],
+                  "to": [modes[i] for i in log_to[:nl]]}
+        labels, mode_idx, final_idx, contact = list(modes), rec_mode[:nr], int(mode), None
+        mode_label = modes[int(mode)]
     n_poinc = periods if status == 0 else max(0, int(t_stop / T) - transient)
-    message = {0: "done",
-               1: f"the state became non-finite at t = {t_stop:.6g} s in mode '{modes[mode]}'",
-               2: f"event storm: more than {max_events_per_step} events in one step at t = {t_stop:.6g} s "
-                  f"in mode '{modes[mode]}'"}[int(status)]
+    message = "done" if status == STATUS_OK else (
+        f"{STATUS_NAMES.get(int(status), 'failure')} at t = {t_stop:.6g} s in mode '{mode_label}'"
+        + (f" (more than {max_events_per_step} events in one step)" if status == STATUS_EVENT_STORM else ""))
+    counter_dict = dict(zip(COUNTER_NAMES, map(int, counters)))
+    if per_contact:
+        counter_dict.update(dict(zip(STAT_NAMES, map(float, stats))))
+        if stats[S_MAX_CONE_RATIO] > 1 + 1e-9:
+            warnings.warn(f"a sticking contact carried {stats[S_MAX_CONE_RATIO]:.12g} times its slip force "
+                          f"(max_cone_ratio > 1 + 1e-9): Coulomb's law was exceeded", RuntimeWarning, stacklevel=2)
     result = SimulationResult(
-        t=rec_t[:nr], y=rec_y[:nr], mode=rec_mode[:nr],
+        t=rec_t[:nr], y=rec_y[:nr], mode=mode_idx,
         poincare_t=T * (transient + 1 + np.arange(n_poinc)), poincare=poincare[:n_poinc],
-        events=events, counters=dict(zip(_COUNTERS, map(int, counters))),
-        state_names=list(meta["state"]), mode_names=list(modes), params=dict(model.parameters),
-        period=T, steps_per_period=int(steps_per_period), final_state=y.copy(), final_mode=int(mode),
+        events=events, counters=counter_dict,
+        state_names=list(meta["state"]), mode_names=labels, params=dict(model.parameters),
+        period=T, steps_per_period=int(steps_per_period), final_state=y.copy(), final_mode=final_idx,
         status=int(status), message=message, length_scale=length_scale,
         settings={"periods": periods, "transient": transient, "steps_per_period": steps_per_period,
-                  "event_tol": event_tol, "record_every": record_every})
+                  "event_tol": event_tol, "record_every": record_every,
+                  "kernel": "contact" if per_contact else "product"},
+        contacts=contact, final_contact_modes=np.asarray(mode).copy() if per_contact else None)
     if status != 0 and raise_on_error:
         raise SimulationError(message, result)
     return result

@@ -8,7 +8,8 @@ import numpy as np
 
 from ..analysis import classify_motion, largest_lyapunov, mean_square, poincare_period, vibration_reduction
 from ..config import apply_overrides, config_from_data
-from ..numeric import HybridIntegrator
+from ..numeric.contract import C_EVENTS, N_COUNTERS, STATUS_NAMES
+from ..numeric.kernels import make_integrator
 from ..numeric.mean_square import mean_square_run, without_contacts
 
 #: Motion codes stored in result files.
@@ -70,7 +71,7 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
     try:
         cfg = build_config(base, overrides)
         model = cfg.build()
-        integ = HybridIntegrator(model, steps_per_period=run["steps_per_period"], event_tol=run["event_tol"])
+        integ = make_integrator(model, steps_per_period=run["steps_per_period"], event_tol=run["event_tol"])
         T, S = integ.period, integ.steps_per_period
         transient, periods = run["transient"], run["periods"]
         y = integ.initial_state(y0)
@@ -79,23 +80,23 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
         want_pd = bool(run.get("vibration_reduction"))
         keep = periods if want_pd else hist  # periods recorded at every step
         n_rec = keep * S + 1 if keep else 0
-        rec = (np.empty(n_rec), np.empty((n_rec, integ.n_state)), np.empty(n_rec, dtype=np.int64))
+        rec = integ.record_buffer(n_rec)
         poinc = np.empty((periods, integ.n_state))
-        counters = np.zeros(6, dtype=np.int64)
+        counters = np.zeros(N_COUNTERS, dtype=np.int64)
         status, mode, t = integ.advance(y, mode, 0, transient, counters=counters)
         if not status:
             status, mode, t = integ.advance(y, mode, transient, transient + periods, poincare=poinc,
                                             counters=counters,
                                             n_transient=transient, record=rec if keep else None)
         if status:
-            raise RuntimeError(f"integration failed at t = {t:.6g} s ({['', 'non-finite state', 'event storm'][status]})")
+            raise RuntimeError(f"integration failed at t = {t:.6g} s ({STATUS_NAMES.get(status, status)})")
         names = integ.state_names
         ix, iv = names.index("x1") if "x1" in names else 0, names.index("vx1") if "vx1" in names else 0
         n_phys = len(model.coordinates) * 2
         scale_len = model.length_scale or float("nan")
         out = {"poincare_x1": poinc[:, ix].copy(), "poincare_vx1": poinc[:, iv].copy(),
                "length_scale": scale_len, "period": poincare_period(poinc[:, :n_phys]),
-               "events": int(counters[1]), "final_state": y.copy()}
+               "events": int(counters[C_EVENTS]), "final_state": y.copy()}
         lam = float("nan")
         if run.get("lyapunov_periods", 0):
             ref = abs(scale_len) if np.isfinite(scale_len) and scale_len else max(np.max(np.abs(poinc[:, 0])), 1e-12)

@@ -64,7 +64,7 @@ class Study(_Strict):
     name : str
     title : str
     base : dict
-        The base model config (``blade_pair`` or ``components`` format) or
+        The base model config (``blade_pair``, ``bladed_disk`` or ``components`` format) or
         ``{"file": "path.yaml"}`` relative to the study file.
     sweep : dict of str to Axis
         One or two swept config fields (nested names with dots).

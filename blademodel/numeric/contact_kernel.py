@@ -1,0 +1,337 @@
+"""The per-contact kernel: build or load the compiled module, set up a model, integrate.
+
+Cache layout (in :func:`~blademodel.numeric.compiled.cache_dir`):
+
+``ck_<kinds>_<code>.json``
+    Index by the law kinds (their :meth:`structure` and class sources) and the
+    sources that shape the generated code; it names the module file and holds its
+    metadata.
+``ck_<hash>.py``
+    The generated module, named by the hash of its own text and of the Python,
+    NumPy and Numba versions, so an edited law, template or library can never run
+    a stale compiled kernel (Numba's cache is keyed by that file).
+``tables_<structure>_<components>.json``
+    The model's derived tables (:mod:`.contact_tables`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import platform
+from pathlib import Path
+
+import numpy as np
+
+from ..model import Model
+from .compiled import _law_sources, _load, cache_dir
+from .contact_tables import NumericTables, cached_tables
+from .contract import N_COUNTERS, N_STATS
+
+_MEMO: dict = {}
+
+
+def _code_version() -> str:
+    here = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for name in ("contact_loop.py", "contact_codegen.py", "law_codegen.py", "contract.py"):
+        h.update((here / name).read_bytes())
+    from ..components import friction as friction_pkg
+    for path in sorted(Path(friction_pkg.__file__).parent.glob("*.py")):
+        h.update(path.read_bytes())
+    return h.hexdigest()[:12]
+
+
+def _versions() -> str:
+    import numba
+    return f"{platform.python_version()}|{np.__version__}|{numba.__version__}"
+
+
+def law_kinds(model: Model) -> tuple[list, list[int]]:
+    """One law instance per distinct :meth:`structure` (sorted), and each contact's kind."""
+    by_key: dict = {}
+    for c in model.contacts:
+        by_key.setdefault(json.dumps([str(x) for x in c.friction.structure()]), c.friction)
+    keys = sorted(by_key)
+    kind = [keys.index(json.dumps([str(x) for x in c.friction.structure()])) for c in model.contacts]
+    return [by_key[k] for k in keys], kind
+
+
+def compile_contact_kernel(model: Model):
+    """The compiled per-contact module for the law kinds of ``model`` and its metadata."""
+    laws, _ = law_kinds(model)
+    kinds_key = json.dumps([[str(x) for x in law.structure()] for law in laws])
+    fake = Model(model.masses, contacts=model.contacts)  # only the laws matter to _law_sources
+    key = hashlib.sha256(f"{kinds_key}|{_law_sources(fake)}|{_code_version()}".encode()).hexdigest()[:16]
+    if key in _MEMO:
+        return _MEMO[key]
+    folder = cache_dir()
+    index = folder / f"ck_{key}.json"
+    if index.exists():
+        info = json.loads(index.read_text())
+        path = folder / info["file"]
+        if not path.exists() or hashlib.sha256((path.read_text() + _versions()).encode()).hexdigest()[:20] \
+                != info["file"][3:-3]:
+            info = None
+    else:
+        info = None
+    if info is None:
+        from .contact_codegen import generate_contact_kernel
+        source, meta = generate_contact_kernel(laws)
+        digest = hashlib.sha256((source + _versions()).encode()).hexdigest()[:20]
+        path = folder / f"ck_{digest}.py"
+        if not path.exists():
+            tmp = path.with_suffix(f".tmp{os.getpid()}")
+            tmp.write_text(source)
+            os.replace(tmp, path)
+        info = {"file": path.name, "meta": meta}
+        tmp = index.with_suffix(f".tmp{os.getpid()}")
+        tmp.write_text(json.dumps(info))
+        os.replace(tmp, index)
+    out = (_load(folder / info["file"]), info["meta"])
+    _MEMO[key] = out
+    return out
+
+
+def run_buffer(n_state: int, nc: int, n_coords: int, gmax: int) -> tuple[tuple, tuple, tuple]:
+    """The kernel's work arrays ``(wi, wf, sc)`` (layout documented in :mod:`.contact_loop`)."""
+    m = max(nc, 1)
+    wi = (np.zeros(2, dtype=np.int64), np.zeros(m, dtype=np.int64), np.zeros(m, dtype=np.int64),
+          np.zeros(m, dtype=np.int64), np.zeros(m, dtype=np.int64), np.zeros(m, dtype=np.int64),
+          np.zeros(m, dtype=np.int64))
+    wf = (np.zeros(n_coords), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m),
+          np.zeros((m, m)), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(8), np.zeros(8), np.zeros(64),
+          np.zeros(n_state))
+    sc = (*(np.zeros(n_state) for _ in range(8)), *(np.zeros((m, gmax)) for _ in range(4)))
+    return wi, wf, sc
+
+
+class ContactIntegrator:
+    """Fixed-step RK4 with located events, every contact holding its own mode.
+
+    The counterpart of :class:`~blademodel.numeric.integrator.HybridIntegrator` for
+    any number of contacts: the compiled code depends only on the friction-law
+    kinds, the model enters as numeric tables, and the hybrid mode is an integer
+    array ``cm`` with one entry per contact (``0`` open, ``1..`` the law's modes).
+    Rigid (Coulomb) stick is solved jointly over the sticking contacts at run time,
+    and every event settles the rigid contacts by the friction complementarity
+    problem (``docs/solver.md``).
+
+    Parameters
+    ----------
+    model : Model
+    steps_per_period, event_tol, max_events_per_step, energy, period, check_stability
+        As for :class:`~blademodel.numeric.integrator.HybridIntegrator`.
+    max_pivots : int
+        Cap on pivots of one friction problem (an unresolved problem stops the run).
+    """
+
+    kernel = "contact"
+
+    def __init__(self, model: Model, *, steps_per_period: int = 1000, event_tol: float = 1e-10,
+                 max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
+                 check_stability: bool = True, max_pivots: int | None = None):
+        from .integrator import check_settings, excitation_period
+        check_settings(steps_per_period, event_tol, max_events_per_step)
+        self.model = model
+        self.period = excitation_period(model) if period is None else float(period)
+        self.steps_per_period = int(steps_per_period)
+        self.event_tol = float(event_tol)
+        self.max_events_per_step = int(max_events_per_step)
+        self.module, self.kmeta = compile_contact_kernel(model)
+        laws, kind = law_kinds(model)
+        self.kind = kind
+        coords = list(model.coordinates)
+        n = len(coords)
+        offsets, names, pos = [], [], 0
+        all_states = [s for c in model.contacts for s in c.friction.states]
+        for c in model.contacts:
+            offsets.append(pos)
+            for st in c.friction.states:
+                names.append(st if all_states.count(st) == 1 else f"{st}_{c.name}")
+            pos += len(c.friction.states)
+        self.n_physical = 2 * n + pos
+        self.n_state = self.n_physical + (3 if energy else 0)
+        self.energy = energy
+        self.param_names = list(model.parameters)
+        self.tables = NumericTables(cached_tables(model), model.parameters, kind, offsets, self.param_names)
+        self.ti, self.tf = self.tables.int_tables(), self.tables.float_tables()
+        self.meta = {"state": [*coords, *(f"v{c}" for c in coords), *names]
+                     + (["W_in", "D_visc", "D_fric"] if energy else []),
+                     "coordinates": coords, "params": self.param_names, "energy": energy,
+                     "contacts": [c.name for c in model.contacts],
+                     "contact_modes": [self.kmeta["kinds"][k]["modes"] for k in kind],
+                     "contact_guards": [self.kmeta["kinds"][k]["guards"] for k in kind]}
+        self.nc = len(model.contacts)
+        self.max_pivots = int(max_pivots) if max_pivots is not None else 4 * self.nc + 20
+        self.wi, self.wf, self.sc = run_buffer(self.n_state, self.nc, n, self.kmeta["gmax"])
+        if len(self.tables.forcing[4]) > self.wf[11].shape[0]:
+            raise ValueError(f"the model's forces have {len(self.tables.forcing[4])} distinct frequencies; "
+                             f"the per-contact kernel takes at most {self.wf[11].shape[0]}")
+        if max([len(k["states"]) for k in self.kmeta["kinds"]] + [0]) > self.wf[13].shape[0]:
+            raise ValueError("a friction law has more than 64 states")
+        if check_stability:
+            from .stability import check_step
+            h_max, which = self.max_stable_step()
+            check_step(self.period, self.steps_per_period, h_max, which)
+        self._empty_log = (np.empty(0), *(np.empty(0, dtype=np.int64) for _ in range(4)))
+
+    # --- modes and states ---------------------------------------------------------------------
+    @property
+    def state_names(self) -> list[str]:
+        return list(self.meta["state"])
+
+    def initial_state(self, y0=None) -> np.ndarray:
+        """State vector from ``y0`` (array or ``{name: value}``); default rest."""
+        from .integrator import state_vector
+        return state_vector(self.meta["state"], self.n_state, y0)
+
+    def record_buffer(self, n_records: int) -> tuple:
+        """``(t, y, cm)`` arrays for ``n_records`` records (``advance(record=...)``)."""
+        return (np.empty(n_records), np.empty((n_records, self.n_state)),
+                np.empty((n_records, self.nc), dtype=np.int8))
+
+    def mode_of(self, y: np.ndarray, t: float = 0.0) -> np.ndarray:
+        """Contact modes of the state ``y`` (closed where the penetration is ``>= 0``).
+
+        May apply entry resets and the stick projection to ``y``, in place.
+        """
+        cm = np.zeros(max(self.nc, 0), dtype=np.int64)
+        counters = np.zeros(N_COUNTERS, dtype=np.int64)
+        if self.nc:
+            ok = self.module.initial_modes(float(t), y, cm, self.ti, self.tf, self.wi, self.wf, self.sc, counters,
+                                           self.max_pivots, *self._empty_log[:2])
+            if not ok:
+                raise RuntimeError("the friction problem of the initial state was not resolved")
+        return cm
+
+    def mode_label(self, cm) -> str:
+        """``"c1=stick,c2=open"`` (the law mode's name alone for one contact; ``"free"`` for none)."""
+        names = self.meta["contacts"]
+        modes = self.meta["contact_modes"]
+        if not names:
+            return "free"
+        if len(names) == 1:
+            return modes[0][int(cm[0])]
+        return ",".join(f"{c}={modes[j][int(m)]}" for j, (c, m) in enumerate(zip(names, cm)))
+
+    # --- flow ----------------------------------------------------------------------------------
+    def rhs(self, t: float, y: np.ndarray, cm) -> np.ndarray:
+        """``dy/dt`` in the contact modes ``cm`` (factors the stick set; for checks, not speed)."""
+        cm = np.asarray(cm, dtype=np.int64)
+        out = np.empty(self.n_state)
+        self.module.factor_stick(cm, self.ti, self.tf, self.wi, self.wf)
+        self.module.rhs(float(t), np.asarray(y, dtype=float), cm, self.ti, self.tf, self.wi, self.wf, out)
+        return out
+
+    def contact_forces(self, t: float, y: np.ndarray, cm) -> tuple[np.ndarray, np.ndarray]:
+        """Normal and friction force of every contact at ``(t, y)`` in modes ``cm``."""
+        cm = np.asarray(cm, dtype=np.int64)
+        self.module.factor_stick(cm, self.ti, self.tf, self.wi, self.wf)
+        self.module.contact_forces(float(t), np.asarray(y, dtype=float), cm, self.ti, self.tf, self.wi, self.wf)
+        return self.wf[1][: self.nc].copy(), self.wf[4][: self.nc].copy()
+
+    def max_stable_step(self) -> tuple[float, str]:
+        """Largest stable RK4 step over the open configuration and each closed mode of every law.
+
+        The Jacobians are taken by finite differences of the (affine) flow at rest.
+        A rigid stick mode is replaced by slip: a constraint cannot raise the
+        highest natural frequency (Rayleigh), so slip bounds it.
+        """
+        from .stability import _ray_limit
+        configs = [np.zeros(self.nc, dtype=np.int64)]
+        kinds = self.kmeta["kinds"]
+        depth = max([len(k["modes"]) for k in kinds] + [1])
+        for m in range(1, depth):
+            cm = np.zeros(self.nc, dtype=np.int64)
+            for j, K in enumerate(self.kind):
+                mm = min(m, len(kinds[K]["modes"]) - 1)
+                if kinds[K]["rigid"] and mm == kinds[K]["rigid"][0]:
+                    mm = kinds[K]["rigid"][1]
+                cm[j] = mm
+            configs.append(cm)
+        n = self.n_physical
+        best, which = math.inf, "-"
+        for cm in configs:
+            y0 = np.zeros(self.n_state)
+            f0 = self.rhs(0.0, y0, cm)[:n]
+            J = np.empty((n, n))
+            for i in range(n):
+                y1 = y0.copy()
+                y1[i] = 1.0
+                J[:, i] = self.rhs(0.0, y1, cm)[:n] - f0
+            for lam in np.linalg.eigvals(J):
+                if lam.real > 1e-9 * max(abs(lam), 1.0):
+                    continue
+                h = _ray_limit(complex(lam))
+                if h < best:
+                    best, which = h, self.mode_label(cm)
+        return best, which
+
+    # --- integration ------------------------------------------------------------------------------
+    def advance(self, y: np.ndarray, mode, start_period: int, end_period: int, *, n_transient: int | None = None,
+                record=None, forces=None, poincare=None, log=None, counters=None, stats=None,
+                record_every: int = 1) -> tuple[int, np.ndarray, float]:
+        """Integrate periods ``start_period`` to ``end_period``; ``y`` is updated in place.
+
+        Parameters
+        ----------
+        y : ndarray
+        mode : array of int
+            Contact modes (not modified; the new modes are returned).
+        record : tuple of arrays, optional
+            ``(t, y, cm)`` with ``cm`` of shape ``(n_records, n_contacts)`` (int8).
+        forces : tuple of arrays, optional
+            ``(N, f)`` of shape ``(n_records, n_contacts)``: each contact's forces per record.
+        log : tuple of arrays, optional
+            ``(t, contact, guard, from, to)``; ``guard`` is ``-1`` for a mode set by the
+            friction problem.
+        counters : ndarray of int64, optional
+            ``contract.N_COUNTERS`` counters, accumulated.
+        stats : ndarray of float, optional
+            ``contract.N_STATS`` statistics (``max_cone_ratio``), accumulated.
+
+        Returns
+        -------
+        status, mode, t
+        """
+        cm = np.array(mode, dtype=np.int64).reshape(self.nc)
+        if y.shape != (self.n_state,):
+            raise ValueError(f"y has shape {y.shape}, expected ({self.n_state},)")
+        if counters is None:
+            counters = np.zeros(N_COUNTERS, dtype=np.int64)
+        if stats is None:
+            stats = np.zeros(N_STATS)
+        nrec = 0 if record is None else record[0].shape[0]
+        rec_t, rec_y, rec_cm = record if record is not None else (
+            np.empty(0), np.empty((0, self.n_state)), np.empty((0, self.nc), dtype=np.int8))
+        rec_N, rec_f = forces if forces is not None else (np.empty((0, self.nc)), np.empty((0, self.nc)))
+        if forces is not None and rec_N.shape[0] != nrec:
+            raise ValueError("forces must have as many rows as the record")
+        if poincare is None:
+            poincare = np.empty((max(end_period - (n_transient or start_period), 0), self.n_state))
+        log_t, log_c, log_g, log_f, log_to = log if log is not None else self._empty_log
+        status, t = self.module.integrate(
+            y, cm, self.ti, self.tf, self.wi, self.wf, self.sc, self.period, self.steps_per_period, int(start_period),
+            int(end_period), int(start_period if n_transient is None else n_transient), int(record_every),
+            self.event_tol, self.max_events_per_step, self.max_pivots, rec_t, rec_y, rec_cm, rec_N, rec_f, poincare,
+            log_t, log_c, log_g, log_f, log_to, counters, stats)
+        return int(status), cm, float(t)
+
+    # --- energy -----------------------------------------------------------------------------------
+    def mechanical_energy(self, y: np.ndarray, cm) -> float:
+        """Kinetic + spring + closed-contact + friction-law energy of the state ``y``."""
+        n = self.tables.n
+        q, u = y[:n], y[n:2 * n]
+        E = 0.5 * float(np.sum(u * u / self.tables.invm)) + 0.5 * float(q @ self.tables.stiffness_matrix() @ q)
+        delta = np.array([sum(self.tables.cgn[j, k] * q[self.tables.cidx[j, k]] for k in range(4)
+                              if self.tables.cidx[j, k] >= 0) - self.tables.cgap[j] for j in range(self.nc)])
+        for j in range(self.nc):
+            if cm[j] != 0:
+                E += 0.5 * self.tables.ck[j] * delta[j] ** 2
+            E += self.module.law_energy(self.kind[j], y, 2 * n + int(self.tables.cso[j]), self.tables.p,
+                                        self.tables.LP, j)
+        return E
+

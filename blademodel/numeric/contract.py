@@ -1,0 +1,41 @@
+"""The kernel contract: status codes, counters and run-buffer layout shared by every kernel.
+
+Both kernels (:mod:`.loop`, the product-mode kernel, and :mod:`.contact_loop`, the
+per-contact kernel) and their Python drivers use these names; nothing indexes a
+counter or tests a status by a bare number. The template files are pasted into
+generated modules, so they import these constants by name from here.
+"""
+
+#: ``integrate`` finished the requested periods.
+STATUS_OK = 0
+#: A state became non-finite (NaN or inf).
+STATUS_NONFINITE = 1
+#: More events than ``max_events`` within one step.
+STATUS_EVENT_STORM = 2
+#: The friction complementarity problem of an event was not resolved within its pivot cap.
+STATUS_FRICTION_UNRESOLVED = 3
+
+#: Human-readable status names, by code.
+STATUS_NAMES = {STATUS_OK: "done", STATUS_NONFINITE: "non-finite state", STATUS_EVENT_STORM: "event storm",
+                STATUS_FRICTION_UNRESOLVED: "friction problem unresolved"}
+
+# Integer counters: one int64 array of N_COUNTERS, accumulated across calls of ``integrate``.
+C_STEPS = 0           #: completed RK4 steps
+C_EVENTS = 1          #: events handled (guard transitions and friction-problem mode changes)
+C_BISECTIONS = 2      #: sub-steps spent locating events
+C_RHS = 3             #: right-hand-side evaluations
+C_LOGGED = 4          #: events offered to the log (may exceed its length)
+C_RECORDS = 5         #: records written (the next record's row)
+C_FRICTION_PIVOTS = 6  #: pivots of the friction complementarity problem (per-contact kernel)
+N_COUNTERS = 7
+
+#: Names of the integer counters, in index order (``SimulationResult.counters``).
+COUNTER_NAMES = ("steps", "events", "bisections", "rhs_evaluations", "events_logged", "records",
+                 "friction_pivots")
+
+# Float statistics: one float64 array of N_STATS, accumulated across calls.
+S_MAX_CONE_RATIO = 0  #: largest |f| / (slip bound) over sticking rigid-stick contacts at step ends
+N_STATS = 1
+
+#: Names of the float statistics, in index order.
+STAT_NAMES = ("max_cone_ratio",)

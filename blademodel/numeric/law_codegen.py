@@ -1,0 +1,263 @@
+"""Generated code of one friction law for the per-contact kernel.
+
+A law's expressions are written once per law *kind* (its :meth:`structure`), in
+scalar context symbols: the contact's normal force ``N``, its rate ``Nd``, the
+relative tangential velocity ``v`` and the friction force ``f``, which the kernel
+computes for each contact at run time. The law's states are read from the state
+vector at the contact's offset (``y[so + i]``) and its parameters through the
+contact's row of the parameter-index table (``p[LP[j, k]]``), so one compiled
+function serves every contact of that law, whatever the number of contacts.
+
+Functions written for law kind ``K`` (``mode`` 0 is ``open``, ``1..`` the law's
+modes in order; guard 0 of every mode is the penetration guard, ``close`` when
+open and ``open`` when closed, the law's guards follow from 1):
+
+``lawK_force(mode, N, Nd, v, y, so, p, LP, j)``
+    Friction force of an explicit-force mode (0 when open or in a rigid stick mode).
+``lawK_rates(mode, N, Nd, v, f, y, so, p, LP, j, out, oo)``
+    Rates of the law's states into ``out[oo + i]``.
+``lawK_guards(mode, N, Nd, v, f, y, so, p, LP, j, G)``
+    Law guard values into ``G[j, 1 + i]``.
+``lawK_transition(mode, gi, N, Nd, v, f, y, so, p, LP, j, ztmp)``
+    Apply guard ``gi``'s first admissible candidate (reset into ``y``) and return the
+    target mode. A candidate whose target is a rigid stick mode is taken at once,
+    reset applied: the kernel then decides stick or slip for that contact together
+    with every other sticking contact (the friction complementarity problem).
+``lawK_energy(y, so, p, LP, j)``, ``lawK_dissipation(mode, N, Nd, v, f, y, so, p, LP, j)``
+    Stored energy of the law's states; friction power ``f v - dE/dt``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+from sympy.printing.pycode import PythonCodePrinter
+
+from ..components.friction.base import STICK, Candidate, ContactContext, FrictionLaw
+
+#: Names of the rigid-stick law modes the friction complementarity problem needs.
+RIGID_STICK_MODES = ("stick", "slip+", "slip-")
+
+
+class _Printer(PythonCodePrinter):
+    def __init__(self, names: dict):
+        super().__init__({"fully_qualified_modules": True, "standard": "python3"})
+        self._names = names
+
+    def _print_Symbol(self, expr):
+        return self._names.get(expr, expr.name)
+
+    def _print_BooleanTrue(self, expr):
+        return "True"
+
+    def _print_BooleanFalse(self, expr):
+        return "False"
+
+
+@dataclass
+class LawCode:
+    """Generated source and tables of one law kind.
+
+    Attributes
+    ----------
+    source : str
+        The ``lawK_*`` functions.
+    modes : list of str
+        ``["open", *law.modes]``.
+    stick : list of bool
+        Per mode: the friction force is a rigid stick constraint.
+    guard_names : list of list of str
+        Per mode, guard 0 (penetration) then the law's guards.
+    guard_dirs : list of list of int
+    n_states, n_params : int
+    param_fields : list of str
+        The law's parameter field names, in ``LP`` column order.
+    rigid : tuple of int or None
+        ``(stick, slip+, slip-)`` mode indices if the law has a rigid stick mode.
+    """
+
+    source: str
+    modes: list
+    stick: list
+    guard_names: list
+    guard_dirs: list
+    n_states: int
+    n_params: int
+    param_fields: list
+    state_names: list
+    rigid: tuple | None
+
+
+def _context(law: FrictionLaw):
+    N, Nd, v, f = (sp.Symbol(n, real=True) for n in ("N", "Nd", "v", "f"))
+    states = {st: sp.Symbol(f"_z{i}", real=True) for i, st in enumerate(law.states)}
+    fields = list(law.parameters())
+    params = {name: sp.Symbol(f"_p{k}", real=True) for k, name in enumerate(fields)}
+    ctx = ContactContext(N=N, Ndot=Nd, v=v, f=f, states=states, params=params)
+    return ctx, fields
+
+
+def _names(ctx: ContactContext, state_array: str = "y") -> dict:
+    out = {ctx.N: "N", ctx.Ndot: "Nd", ctx.v: "v", ctx.f: "f"}
+    for i, s in enumerate(ctx.states.values()):
+        out[s] = f"{state_array}[so + {i}]" if state_array == "y" else f"{state_array}[{i}]"
+    for k, s in enumerate(ctx.params.values()):
+        out[s] = f"p[LP[j, {k}]]"
+    return out
+
+
+def _assign(exprs, targets, printer, pad, tag):
+    """Source lines assigning ``exprs`` to ``targets`` with shared sub-expressions (floats)."""
+    exprs = [sp.sympify(e) for e in exprs]
+    if not exprs:
+        return []
+    reps, reduced = sp.cse(exprs, symbols=sp.numbered_symbols(f"{tag}_"), optimizations="basic")
+    lines = [f"{pad}{s} = {printer.doprint(e)}" for s, e in reps]
+    for tgt, e in zip(targets, reduced):
+        text = repr(float(e)) if e.is_Number else printer.doprint(e)
+        lines.append(f"{pad}{tgt} = {text}")
+    return lines
+
+
+def _check_rigid(law: FrictionLaw, ctx: ContactContext, name: str):
+    """The contract of a law with a rigid stick mode, or a clear error."""
+    if tuple(law.modes) != RIGID_STICK_MODES:
+        raise ValueError(f"friction law {name}: a law with a rigid stick mode (force STICK) must have the modes "
+                         f"{RIGID_STICK_MODES} for the per-contact kernel, not {tuple(law.modes)}")
+    fp, fm = law.force("slip+", ctx), law.force("slip-", ctx)
+    if fp is STICK or fm is STICK or sp.simplify(fp + fm) != 0:
+        raise ValueError(f"friction law {name}: the slip forces must be opposite (+F in slip+, -F in slip-), "
+                         f"got {fp} and {fm}")
+
+
+def law_code(law: FrictionLaw, K: int) -> LawCode:
+    """Generate the functions of law kind ``K`` from ``law``'s symbolic expressions.
+
+    Parameters
+    ----------
+    law : FrictionLaw
+        Any instance of the kind (only its structure matters).
+    K : int
+        The kind's number in the generated module.
+
+    Returns
+    -------
+    LawCode
+    """
+    name = type(law).__name__
+    ctx, fields = _context(law)
+    modes = ["open", *law.modes]
+    pr = _Printer(_names(ctx))
+    pr_tmp = _Printer(_names(ctx, "ztmp"))
+    states = list(ctx.states.values())
+    forces = [sp.Integer(0)] + [law.force(m, ctx) for m in law.modes]
+    stick = [f is STICK for f in forces]
+    rigid = None
+    if any(stick):
+        _check_rigid(law, ctx, name)
+        rigid = tuple(modes.index(m) for m in RIGID_STICK_MODES)
+    explicit = [sp.Integer(0) if f is STICK else sp.sympify(f) for f in forces]
+    L = []
+
+    def branch(m, first):
+        return f"    {'if' if first else 'elif'} mode == {m}:"
+
+    # force
+    L.append(f"def law{K}_force(mode, N, Nd, v, y, so, p, LP, j):")
+    for m in range(1, len(modes)):
+        if explicit[m] != 0:
+            L.append(f"    if mode == {m}:")
+            L += _assign([explicit[m]], ["fm"], pr, " " * 8, "x")
+            L.append("        return fm")
+    L.append("    return 0.0")
+    L.append("")
+
+    # rates
+    L.append(f"def law{K}_rates(mode, N, Nd, v, f, y, so, p, LP, j, out, oo):")
+    body = []
+    for m, mode in enumerate(modes):
+        r = law.open_rates(ctx) if m == 0 else law.rates(mode, ctx)
+        exprs = [sp.sympify(r.get(st, 0)) for st in law.states]
+        if not exprs:
+            continue
+        body.append(branch(m, not body))
+        body += _assign(exprs, [f"out[oo + {i}]" for i in range(len(exprs))], pr, " " * 8, "x")
+    L += body or ["    pass"]
+    L.append("")
+
+    # guards
+    guard_names, guard_dirs, guard_lists = [], [], []
+    L.append(f"def law{K}_guards(mode, N, Nd, v, f, y, so, p, LP, j, G):")
+    body = []
+    for m, mode in enumerate(modes):
+        gl = [] if m == 0 else list(law.guards(mode, ctx))
+        for g in gl:
+            if g.direction not in (-1, 0, 1):
+                raise ValueError(f"friction law {name}: guard {g.name!r}: direction must be -1, 0 or +1")
+        guard_lists.append(gl)
+        guard_names.append(["close" if m == 0 else "open"] + [g.name for g in gl])
+        guard_dirs.append([1 if m == 0 else -1] + [g.direction for g in gl])
+        if gl:
+            body.append(branch(m, not body))
+            body += _assign([g.expr for g in gl], [f"G[j, {1 + i}]" for i in range(len(gl))], pr, " " * 8, "x")
+    L += body or ["    pass"]
+    L.append("")
+
+    # transitions
+    L.append(f"def law{K}_transition(mode, gi, N, Nd, v, f, y, so, p, LP, j, ztmp):")
+    first = True
+    for m, mode in enumerate(modes):
+        if m == 0:
+            per_guard = [law.entry(ctx)]
+        else:
+            per_guard = [[Candidate("open", sp.true, law.exit_reset(ctx))]] + [list(g.candidates)
+                                                                             for g in guard_lists[m]]
+        for gi, cands in enumerate(per_guard):
+            L.append(f"    {'if' if first else 'elif'} mode == {m} and gi == {gi}:")
+            first = False
+            for ci, cand in enumerate(cands):
+                if cand.mode not in modes:
+                    raise ValueError(f"friction law {name} names mode {cand.mode!r}, which is not among its "
+                                     f"modes {tuple(modes)}")
+                target = modes.index(cand.mode)
+                L += [f"        ztmp[{i}] = y[so + {i}]" for i in range(len(states))]
+                keys = list(cand.reset)
+                L += _assign([cand.reset[k] for k in keys], [f"ztmp[{law.states.index(k)}]" for k in keys],
+                             pr, " " * 8, "r")
+                last = ci == len(cands) - 1
+                if last or stick[target] or cand.when is sp.true:
+                    test = "True"
+                else:
+                    fc = explicit[target]
+                    L += _assign([fc], ["fc"], pr_tmp, " " * 8, "c")
+                    cond = sp.sympify(cand.when).xreplace({ctx.f: sp.Symbol("fc", real=True)})
+                    test = pr_tmp.doprint(cond)
+                L.append(f"        if {test}:")
+                L += [f"            y[so + {i}] = ztmp[{i}]" for i in range(len(states))]
+                L.append(f"            return {target}")
+                if test == "True":
+                    break
+    L.append("    return mode")
+    L.append("")
+
+    # energy and friction power
+    E = sp.sympify(law.stored_energy(ctx))
+    L.append(f"def law{K}_energy(y, so, p, LP, j):")
+    L += _assign([E], ["e"], pr, " " * 4, "x")
+    L.append("    return e")
+    L.append("")
+    L.append(f"def law{K}_dissipation(mode, N, Nd, v, f, y, so, p, LP, j):")
+    body = []
+    for m in range(1, len(modes)):
+        r = law.rates(modes[m], ctx)
+        dE = sum((sp.diff(E, s) * sp.sympify(r.get(st, 0)) for st, s in ctx.states.items()), sp.Integer(0))
+        body.append(f"    if mode == {m}:")
+        body += _assign([ctx.f * ctx.v - dE], ["d"], pr, " " * 8, "x")
+        body.append("        return d")
+    L += body
+    L.append("    return 0.0")
+    L.append("")
+    return LawCode(source="\n".join(L), modes=modes, stick=stick, guard_names=guard_names, guard_dirs=guard_dirs,
+                   n_states=len(states), n_params=len(fields), param_fields=fields, state_names=list(law.states),
+                   rigid=rigid)
