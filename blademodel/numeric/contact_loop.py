@@ -322,13 +322,15 @@ def crossed(g0, g1, direction):
     return (g0 > 0.0 and g1 <= 0.0) or (g0 < 0.0 and g1 >= 0.0)
 
 
-def first_crossing(cm, claw, G0, G1, skip):
+def first_crossing(cm, claw, G0, G1, fired, use_fired):
     """``j * GMAX + gi`` of the first guard that crossed (contacts in order), or -1.
 
-    Contact ``skip`` is passed over (-1: none).
+    With ``use_fired``, contacts with ``fired[j] != 0`` are passed over: a contact
+    whose transition fired in this event has been settled by its law, and its new
+    mode's guards compared across the bracket mean nothing.
     """
     for j in range(cm.shape[0]):
-        if j == skip:
+        if use_fired and fired[j] != 0:
             continue
         K = claw[j]
         m = cm[j]
@@ -530,6 +532,7 @@ def initial_modes(t, y, cm, ti, tf, wi, wf, sc, counters, max_pivots, e, ei):
     for j in range(cm.shape[0]):
         if G[j, 0] >= 0.0 and NG[claw[j], 0] > 0:  # noqa: F821
             cm[j] = apply_transition(t, y, cm, j, 0, ti, tf, wi, wf)
+            factor_stick(cm, ti, tf, wi, wf)
     return settle_event(t, y, cm, ti, tf, wi, wf, counters, max_pivots, e, ei, ei, ei, ei, False)
 
 
@@ -582,7 +585,7 @@ def integrate(y, cm, ti, tf, wi, wf, sc, period, steps_per_period, start_period,
                 if not g0_valid:
                     eval_guards(t, y, cm, ti, tf, wi, wf, G0)
                 eval_guards(t_end, y1, cm, ti, tf, wi, wf, G1)
-                if first_crossing(cm, claw, G0, G1, -1) < 0:
+                if first_crossing(cm, claw, G0, G1, wi[6], False) < 0:
                     for i in range(n):
                         y[i] = y1[i]
                     for j in range(nc):
@@ -601,7 +604,7 @@ def integrate(y, cm, ti, tf, wi, wf, sc, period, steps_per_period, start_period,
                     eval_guards(t + mid * dt, ymid, cm, ti, tf, wi, wf, Gm)
                     counters[C_BISECTIONS] += 1
                     counters[C_RHS] += 4
-                    if first_crossing(cm, claw, G0, Gm, -1) >= 0:
+                    if first_crossing(cm, claw, G0, Gm, wi[6], False) >= 0:
                         hi = mid
                         for i in range(n):
                             y1[i] = ymid[i]
@@ -610,7 +613,7 @@ def integrate(y, cm, ti, tf, wi, wf, sc, period, steps_per_period, start_period,
                                 G1[j, gi] = Gm[j, gi]
                     else:
                         lo = mid
-                code = first_crossing(cm, claw, G0, G1, -1)
+                code = first_crossing(cm, claw, G0, G1, wi[6], False)
                 t_sub = t
                 for i in range(n):
                     ysub[i] = y[i]
@@ -628,9 +631,10 @@ def integrate(y, cm, ti, tf, wi, wf, sc, period, steps_per_period, start_period,
                     if n_events > max_events:
                         counters[C_RECORDS] = irec
                         return STATUS_EVENT_STORM, t
+                    factor_stick(cm, ti, tf, wi, wf)
                     eval_guards(t_sub, ysub, cm, ti, tf, wi, wf, Gs)
                     eval_guards(t, y, cm, ti, tf, wi, wf, G1)
-                    code = first_crossing(cm, claw, Gs, G1, j)
+                    code = first_crossing(cm, claw, Gs, G1, wi[6], True)
                 if not settle_event(t, y, cm, ti, tf, wi, wf, counters, max_pivots, log_t, log_c, log_g,
                                     log_from, log_to, recording):
                     counters[C_RECORDS] = irec
