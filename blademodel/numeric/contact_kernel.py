@@ -28,6 +28,7 @@ import numpy as np
 from ..model import Model
 from .compiled import _law_sources, _load, cache_dir
 from .contact_tables import NumericTables, cached_tables
+from . import contract
 from .contract import N_COUNTERS, N_STATS
 
 _MEMO: dict = {}
@@ -95,17 +96,48 @@ def compile_contact_kernel(model: Model):
     return out
 
 
-def run_buffer(n_state: int, nc: int, n_coords: int, gmax: int) -> tuple[tuple, tuple, tuple]:
-    """The kernel's work arrays ``(wi, wf, sc)`` (layout documented in :mod:`.contact_loop`)."""
+def pack_tables(tables: NumericTables, n_state: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The flat arrays ``I``, ``R``, ``WI``, ``WF`` of the kernel (layout: :mod:`.contract`)."""
+    n, nc = tables.n, len(tables.cgap)
     m = max(nc, 1)
-    wi = (np.zeros(2, dtype=np.int64), np.zeros(m, dtype=np.int64), np.zeros(m, dtype=np.int64),
-          np.zeros(m, dtype=np.int64), np.zeros(m, dtype=np.int64), np.zeros(m, dtype=np.int64),
-          np.zeros(m, dtype=np.int64))
-    wf = (np.zeros(n_coords), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m),
-          np.zeros((m, m)), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(8), np.zeros(8), np.zeros(64),
-          np.zeros(n_state))
-    sc = (*(np.zeros(n_state) for _ in range(8)), *(np.zeros((m, gmax)) for _ in range(4)))
-    return wi, wf, sc
+    Kp, Ki, Kv = tables.K
+    Cp, Ci, Cv = tables.C
+    fi, fg, fs, fc, om = tables.forcing
+    if len(om) > contract.MAX_GROUPS:
+        raise ValueError(f"the model's forces have {len(om)} distinct frequencies; the per-contact kernel takes "
+                         f"at most {contract.MAX_GROUPS}")
+    header = np.zeros(contract.H_SIZE, dtype=np.int64)
+    header[contract.H_N], header[contract.H_NC], header[contract.H_NF] = n, nc, len(fi)
+    header[contract.H_NG], header[contract.H_LPW] = len(om), tables.LP.shape[1]
+    header[contract.H_NLAW] = n_state_law(tables)
+
+    def pack(parts, keys, dtype, start):
+        chunks, pos = [], start
+        for key, part in zip(keys, parts):
+            part = np.ascontiguousarray(part, dtype=dtype).ravel()
+            header[key] = pos
+            chunks.append(part)
+            pos += max(part.size, 1)
+            if part.size == 0:
+                chunks.append(np.zeros(1, dtype=dtype))
+        return np.concatenate(chunks) if chunks else np.zeros(0, dtype=dtype)
+
+    ints = pack([Kp, Ki, Cp, Ci, fi, fg, tables.cidx, tables.claw, tables.cso, tables.LP],
+                range(contract.O_KP, contract.O_LP + 1), np.int64, contract.H_SIZE)
+    R = pack([tables.invm, Kv, Cv, fs, fc, om, tables.cgn, tables.cgr, tables.cgap, tables.ck, tables.p, tables.W],
+             range(contract.R_INVM, contract.R_W + 1), np.float64, 0)
+    sizes = [n] + [m] * 9 + [contract.MAX_GROUPS, contract.MAX_GROUPS, contract.MAX_LAW_STATES, n_state, m * m]
+    WF = pack([np.zeros(k) for k in sizes],
+              [contract.F_F, contract.F_N, contract.F_ND, contract.F_V, contract.F_FR, contract.F_DL, contract.F_X,
+               contract.F_D, contract.F_NULL, contract.F_B, contract.F_SG, contract.F_CG, contract.F_Z,
+               contract.F_YEV, contract.F_L], np.float64, 0)
+    I = np.concatenate([header, ints])
+    WI = np.zeros(2 + 6 * m, dtype=np.int64)
+    return I, R, WI, WF
+
+
+def n_state_law(tables: NumericTables) -> int:
+    return int(tables.n_law)
 
 
 class ContactIntegrator:
@@ -157,7 +189,7 @@ class ContactIntegrator:
         self.energy = energy
         self.param_names = list(model.parameters)
         self.tables = NumericTables(cached_tables(model), model.parameters, kind, offsets, self.param_names)
-        self.ti, self.tf = self.tables.int_tables(), self.tables.float_tables()
+        self.tables.n_law = pos
         self.meta = {"state": [*coords, *(f"v{c}" for c in coords), *names]
                      + (["W_in", "D_visc", "D_fric"] if energy else []),
                      "coordinates": coords, "params": self.param_names, "energy": energy,
@@ -166,12 +198,11 @@ class ContactIntegrator:
                      "contact_guards": [self.kmeta["kinds"][k]["guards"] for k in kind]}
         self.nc = len(model.contacts)
         self.max_pivots = int(max_pivots) if max_pivots is not None else 4 * self.nc + 20
-        self.wi, self.wf, self.sc = run_buffer(self.n_state, self.nc, n, self.kmeta["gmax"])
-        if len(self.tables.forcing[4]) > self.wf[11].shape[0]:
-            raise ValueError(f"the model's forces have {len(self.tables.forcing[4])} distinct frequencies; "
-                             f"the per-contact kernel takes at most {self.wf[11].shape[0]}")
-        if max([len(k["states"]) for k in self.kmeta["kinds"]] + [0]) > self.wf[13].shape[0]:
-            raise ValueError("a friction law has more than 64 states")
+        self.I, self.R, self.WI, self.WF = pack_tables(self.tables, self.n_state)
+        self.SC = np.zeros((8, self.n_state))
+        self.GS = np.zeros((4, max(self.nc, 1), self.kmeta["gmax"]))
+        if max([len(k["states"]) for k in self.kmeta["kinds"]] + [0]) > contract.MAX_LAW_STATES:
+            raise ValueError(f"a friction law has more than {contract.MAX_LAW_STATES} states")
         if check_stability:
             from .stability import check_step
             h_max, which = self.max_stable_step()
@@ -201,7 +232,7 @@ class ContactIntegrator:
         cm = np.zeros(max(self.nc, 0), dtype=np.int64)
         counters = np.zeros(N_COUNTERS, dtype=np.int64)
         if self.nc:
-            ok = self.module.initial_modes(float(t), y, cm, self.ti, self.tf, self.wi, self.wf, self.sc, counters,
+            ok = self.module.initial_modes(float(t), y, cm, self.I, self.R, self.WI, self.WF, self.GS[0], counters,
                                            self.max_pivots, *self._empty_log[:2])
             if not ok:
                 raise RuntimeError("the friction problem of the initial state was not resolved")
@@ -222,16 +253,17 @@ class ContactIntegrator:
         """``dy/dt`` in the contact modes ``cm`` (factors the stick set; for checks, not speed)."""
         cm = np.asarray(cm, dtype=np.int64)
         out = np.empty(self.n_state)
-        self.module.factor_stick(cm, self.ti, self.tf, self.wi, self.wf)
-        self.module.rhs(float(t), np.asarray(y, dtype=float), cm, self.ti, self.tf, self.wi, self.wf, out)
+        self.module.factor_stick(cm, self.I, self.R, self.WI, self.WF)
+        self.module.rhs(float(t), np.asarray(y, dtype=float), cm, self.I, self.R, self.WI, self.WF, out)
         return out
 
     def contact_forces(self, t: float, y: np.ndarray, cm) -> tuple[np.ndarray, np.ndarray]:
         """Normal and friction force of every contact at ``(t, y)`` in modes ``cm``."""
         cm = np.asarray(cm, dtype=np.int64)
-        self.module.factor_stick(cm, self.ti, self.tf, self.wi, self.wf)
-        self.module.contact_forces(float(t), np.asarray(y, dtype=float), cm, self.ti, self.tf, self.wi, self.wf)
-        return self.wf[1][: self.nc].copy(), self.wf[4][: self.nc].copy()
+        self.module.factor_stick(cm, self.I, self.R, self.WI, self.WF)
+        self.module.contact_forces(float(t), np.asarray(y, dtype=float), cm, self.I, self.R, self.WI, self.WF)
+        N0, f0 = self.I[contract.F_N], self.I[contract.F_FR]
+        return self.WF[N0:N0 + self.nc].copy(), self.WF[f0:f0 + self.nc].copy()
 
     def max_stable_step(self) -> tuple[float, str]:
         """Largest stable RK4 step over the open configuration and each closed mode of every law.
@@ -314,7 +346,7 @@ class ContactIntegrator:
             poincare = np.empty((max(end_period - (n_transient or start_period), 0), self.n_state))
         log_t, log_c, log_g, log_f, log_to = log if log is not None else self._empty_log
         status, t = self.module.integrate(
-            y, cm, self.ti, self.tf, self.wi, self.wf, self.sc, self.period, self.steps_per_period, int(start_period),
+            y, cm, self.I, self.R, self.WI, self.WF, self.SC, self.GS, self.period, self.steps_per_period, int(start_period),
             int(end_period), int(start_period if n_transient is None else n_transient), int(record_every),
             self.event_tol, self.max_events_per_step, self.max_pivots, rec_t, rec_y, rec_cm, rec_N, rec_f, poincare,
             log_t, log_c, log_g, log_f, log_to, counters, stats)
@@ -331,7 +363,6 @@ class ContactIntegrator:
         for j in range(self.nc):
             if cm[j] != 0:
                 E += 0.5 * self.tables.ck[j] * delta[j] ** 2
-            E += self.module.law_energy(self.kind[j], y, 2 * n + int(self.tables.cso[j]), self.tables.p,
-                                        self.tables.LP, j)
+            E += self.module.law_energy(self.kind[j], y, 2 * n + int(self.tables.cso[j]), self.R, self.I, j)
         return E
 

@@ -8,39 +8,41 @@ after the friction laws' functions and tables: ``law_force``, ``law_rates``,
 the number of contacts: every contact holds one mode integer ``cm[j]`` and is
 handled by index.
 
-Tables (constant during a run), grouped in two tuples:
+Tables and work arrays are four flat arrays (``I``, ``R``, ``WI``, ``WF``) whose
+layout is part of the kernel contract (:mod:`blademodel.numeric.contract`, built by
+:func:`blademodel.numeric.contact_kernel.pack_tables`): the header of ``I`` holds the
+sizes and the offset of every table, and each function takes *views* of what it
+needs (no copies; every function is compiled without reference counting, see
+:mod:`.contact_codegen`). The tables:
 
-``ti`` (int64): ``Kp, Ki`` (stiffness, CSR rows), ``Cp, Ci`` (damping, CSR),
-``fi, fg`` (forcing entries: coordinate and frequency group), ``cidx`` (contact
-slots, ``(nc, 4)``, -1 unused), ``claw`` (law kind), ``cso`` (state offset of the
-law's states after ``q`` and ``u``), ``LP`` (the law's parameter indices into ``p``).
+``I``: ``Kp, Ki`` (stiffness, CSR rows), ``Cp, Ci`` (damping, CSR), ``fi, fg``
+(forcing entries: coordinate, frequency group), ``cidx`` (contact slots, ``(nc, 4)``,
+-1 unused), ``claw`` (law kind), ``cso`` (offset of the law's states after ``q`` and
+``u``), ``LP`` (the law's parameter indices into ``p``, ``(nc, LPW)``).
 
-``tf`` (float64): ``invm`` (inverse masses), ``Kv``, ``Cv`` (CSR values),
-``fs, fc`` (forcing ``fs sin(w t) + fc cos(w t)``), ``om`` (group frequencies),
-``cgn, cgr`` (gradients of the penetration and of the relative slip, per slot),
-``cgap``, ``ck`` (gap, normal stiffness), ``p`` (parameter values), ``W``
-(Delassus matrix ``G M^-1 G^T`` of the tangential directions, ``(nc, nc)``).
+``R``: ``invm`` (inverse masses), ``Kv``, ``Cv`` (CSR values), ``fs, fc`` (forcing
+``fs sin(w t) + fc cos(w t)``), ``om`` (group frequencies), ``cgn, cgr`` (gradients
+of the penetration and of the relative slip, ``(nc, 4)``), ``cgap``, ``ck`` (gap,
+normal stiffness), ``p`` (parameter values), ``W`` (Delassus matrix ``G M^-1 G^T`` of
+the tangential directions, ``(nc, nc)``).
 
-Work arrays (the run buffer), grouped likewise:
+``WI``: ``[ns, null pivot or -1]``, then ``nc`` each: ``sl`` (the sticking rigid
+contacts, ascending), ``env`` (first column of each row of the stick matrix's
+envelope), ``U`` (contacts of the current friction problem), ``cm0`` (modes before
+an event), ``before`` (modes before the friction problem, for the log), ``fired``
+(1 + the log row of the contact's transition in the current event, 0 if none, -1
+unlogged).
 
-``wi`` (int64): ``ws`` (``ws[0]`` number of sticking rigid contacts, ``ws[1]``
-position of the null pivot or -1), ``sl`` (the sticking contacts, ascending),
-``env`` (first column of each row of the stick matrix's envelope), ``U``
-(contacts of the current friction problem), ``cm0`` (modes before an event),
-``before`` (modes before the friction problem, for the log), ``fired`` (per
-contact, 1 + the log row of its transition in the current event, 0 if none).
+``WF``: ``F`` (generalized forces), ``cN, cNd, cv, cf, cdl`` (per contact normal
+force, its rate, slip velocity, friction force, penetration), ``xst`` (stick
+forces), ``Dd`` and ``Lf`` (envelope LDL^T factor of the stick matrix), ``nullv``
+(its null vector), ``bst`` (stick right-hand side), ``sg, cg`` (sin and cos of each
+frequency group), ``ztmp`` (law-state scratch), ``yev`` (state at an event before
+the friction problem).
 
-``wf`` (float64): ``F`` (generalized forces), ``cN, cNd, cv, cf, cdl`` (per
-contact normal force, its rate, slip velocity, friction force, penetration),
-``xst`` (stick forces), ``Lf, Dd`` (envelope LDL^T factor of the stick matrix),
-``nullv`` (its null vector, a closed ring of sticking contacts), ``bst`` (stick
-right-hand side), ``sg, cg`` (sin and cos of each frequency group), ``ztmp``
-(law-state scratch), ``yev`` (state at an event before the friction problem).
-
-``sc`` (scratch of ``integrate``): ``k1 .. k4, tmp, y1, ymid, ysub`` (states) and
-``G0, G1, Gm, Gs`` (guard values, ``(nc, GMAX)``). The kernel allocates nothing:
-every function is compiled without reference counting (see :mod:`.contact_codegen`).
-:func:`blademodel.numeric.contact_kernel.run_buffer` allocates both.
+``integrate`` also takes ``SC`` (``(8, n_state)``: RK4 stages and sub-step states)
+and ``GS`` (``(4, nc, GMAX)``: guard values at the step start, end, bisection point
+and sub-step start). The kernel allocates nothing.
 
 Rigid stick (Coulomb) is solved jointly: the stick forces ``x`` of the sticking
 contacts satisfy ``W_SS x = G_S M^-1 F_known`` (zero relative tangential
@@ -56,11 +58,15 @@ while *some* admissible distribution exists.
 
 import math  # noqa: F401
 
-import numpy as np
+import numpy as np  # noqa: F401
 
 from blademodel.numeric.contract import (C_BISECTIONS, C_EVENTS, C_FRICTION_PIVOTS, C_LOGGED, C_RECORDS, C_RHS,
-                                         C_STEPS, S_MAX_CONE_RATIO, STATUS_EVENT_STORM,
-                                         STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE, STATUS_OK)
+                                         C_STEPS, F_B, F_CG, F_D, F_DL, F_F, F_FR, F_L, F_N, F_ND, F_NULL, F_SG,
+                                         F_V, F_X, F_YEV, F_Z, H_LPW, MAX_LAW_STATES, H_N, H_NC, H_NF, H_NG, H_NLAW, O_CI, O_CIDX,
+                                         O_CLAW, O_CP, O_CSO, O_FG, O_FI, O_KI, O_KP, O_LP, R_CV, R_FC, R_FS,
+                                         R_GAP, R_GN, R_GR, R_INVM, R_K, R_KV, R_OM, R_P, R_W, S_MAX_CONE_RATIO,
+                                         STATUS_EVENT_STORM, STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE,
+                                         STATUS_OK)
 
 #: Relative size of a pivot of the stick matrix below which it counts as zero (a closed ring).
 NULL_PIVOT = 1e-10
@@ -68,20 +74,46 @@ NULL_PIVOT = 1e-10
 SLIP_SIGN_TOL = 1e-9
 
 
+# ---- views of the flat buffers --------------------------------------------------------------
+def vec(a, I, key, size):
+    """The table at offset ``I[key]`` of ``a``, ``size`` long."""
+    o = I[key]
+    return a[o:o + size]
+
+
+def mat(a, I, key, rows, cols):
+    """The ``(rows, cols)`` table at offset ``I[key]`` of ``a``."""
+    o = I[key]
+    return a[o:o + rows * cols].reshape((rows, cols))
+
+
+def wvec(WI, nc, k):
+    """The ``k``-th per-contact array of ``WI`` (0 ``sl``, 1 ``env``, 2 ``U``, 3 ``cm0``, 4 ``before``, 5 ``fired``)."""
+    o = 2 + k * nc
+    return WI[o:o + nc]
+
+
+def law_offset(I, j):
+    """Offset in ``y`` of contact ``j``'s law states."""
+    return 2 * I[H_N] + I[I[O_CSO] + j]
+
+
 # ---- the stick matrix ---------------------------------------------------------------
-def factor_stick(cm, ti, tf, wi, wf):
+def factor_stick(cm, I, R, WI, WF):
     """Collect the sticking rigid contacts and factor their Delassus block (envelope LDL^T)."""
-    claw = ti[7]
-    W = tf[11]
-    ws, sl, env = wi[0], wi[1], wi[2]
-    Lf, Dd, nullv = wf[7], wf[8], wf[9]
+    nc = I[H_NC]
+    claw = vec(I, I, O_CLAW, nc)
+    W = mat(R, I, R_W, nc, nc)
+    sl, env = wvec(WI, nc, 0), wvec(WI, nc, 1)
+    Lf = mat(WF, I, F_L, nc, nc)
+    Dd, nullv = vec(WF, I, F_D, nc), vec(WF, I, F_NULL, nc)
     ns = 0
-    for j in range(cm.shape[0]):
+    for j in range(nc):
         if IS_STICK[claw[j], cm[j]]:  # noqa: F821
             sl[ns] = j
             ns += 1
-    ws[0] = ns
-    ws[1] = -1
+    WI[0] = ns
+    WI[1] = -1
     for a in range(ns):
         env[a] = a
         for b in range(a):
@@ -99,13 +131,12 @@ def factor_stick(cm, ti, tf, wi, wf):
             d -= Lf[i, k] * Lf[i, k] * Dd[k]
         if d <= NULL_PIVOT * W[sl[i], sl[i]]:
             d = 0.0
-            ws[1] = i
+            WI[1] = i
         Dd[i] = d
-    if ws[1] >= 0:
-        k0 = ws[1]
+    if WI[1] >= 0:
         for a in range(ns):
             nullv[a] = 0.0
-        nullv[k0] = 1.0
+        nullv[WI[1]] = 1.0
         back_substitute(ns, env, Lf, nullv)
 
 
@@ -130,19 +161,18 @@ def solve_stick(ns, env, Lf, Dd, b, x):
     back_substitute(ns, env, Lf, x)
 
 
-def slip_bound(j, y, ti, tf, wf):
+def slip_bound(j, y, I, R, WF):
     """The slip force magnitude ``mu N`` of rigid contact ``j`` (its slip+ force)."""
-    claw, cso, LP = ti[7], ti[8], ti[9]
-    p = tf[10]
-    K = claw[j]
-    n = tf[0].shape[0]
-    return law_force(K, RIGID[K, 1], wf[1][j], wf[2][j], wf[3][j], y, 2 * n + cso[j], p, LP, j)  # noqa: F821
+    K = I[I[O_CLAW] + j]
+    return law_force(K, RIGID[K, 1], WF[I[F_N] + j], WF[I[F_ND] + j], WF[I[F_V] + j], y,  # noqa: F821
+                     law_offset(I, j), R, I, j)
 
 
-def least_cone_ratio(y, ti, tf, wi, wf):
+def least_cone_ratio(y, I, R, WI, WF):
     """Shift the stick forces along the null vector to minimise ``max |x| / bound``."""
-    ns, sl = wi[0][0], wi[1]
-    xst, nullv = wf[6], wf[9]
+    ns, nc = WI[0], I[H_NC]
+    sl = wvec(WI, nc, 0)
+    xst, nullv = vec(WF, I, F_X, nc), vec(WF, I, F_NULL, nc)
     lo = math.inf
     hi = -math.inf
     for a in range(ns):
@@ -157,7 +187,7 @@ def least_cone_ratio(y, ti, tf, wi, wf):
         worst = -1.0
         slope = 0.0
         for a in range(ns):
-            w = 1.0 / max(slip_bound(sl[a], y, ti, tf, wf), 1e-300)
+            w = 1.0 / max(slip_bound(sl[a], y, I, R, WF), 1e-300)
             val = (xst[a] + c * nullv[a]) * w
             if abs(val) > worst:
                 worst = abs(val)
@@ -172,17 +202,26 @@ def least_cone_ratio(y, ti, tf, wi, wf):
 
 
 # ---- forces and flow --------------------------------------------------------------------
-def contact_forces(t, y, cm, ti, tf, wi, wf):
+def contact_forces(t, y, cm, I, R, WI, WF):
     """Generalized forces ``F`` and each contact's ``N``, ``Nd``, ``v``, ``f``, penetration.
 
     Returns the input power of the forcing (for the energy accumulators).
     """
-    Kp, Ki, Cp, Ci, fi, fg, cidx, claw, cso, LP = ti
-    invm, Kv, Cv, fs, fc, om, cgn, cgr, cgap, ck, p, W = tf
-    F, cN, cNd, cv, cf, cdl, bst, xst = wf[0], wf[1], wf[2], wf[3], wf[4], wf[5], wf[10], wf[6]
-    sg, cg = wf[11], wf[12]
-    n = invm.shape[0]
-    for g in range(om.shape[0]):
+    n, nc, nf, ng = I[H_N], I[H_NC], I[H_NF], I[H_NG]
+    Kp, Ki = vec(I, I, O_KP, n + 1), I[I[O_KI]:]
+    Cp, Ci = vec(I, I, O_CP, n + 1), I[I[O_CI]:]
+    Kv, Cv = R[I[R_KV]:], R[I[R_CV]:]
+    fi, fg = vec(I, I, O_FI, nf), vec(I, I, O_FG, nf)
+    fs, fc, om = vec(R, I, R_FS, nf), vec(R, I, R_FC, nf), vec(R, I, R_OM, ng)
+    cidx, claw = mat(I, I, O_CIDX, nc, 4), vec(I, I, O_CLAW, nc)
+    cgn, cgr = mat(R, I, R_GN, nc, 4), mat(R, I, R_GR, nc, 4)
+    cgap, ck = vec(R, I, R_GAP, nc), vec(R, I, R_K, nc)
+    invm = vec(R, I, R_INVM, n)
+    F = vec(WF, I, F_F, n)
+    cN, cNd, cv, cf, cdl = (vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc),
+                            vec(WF, I, F_FR, nc), vec(WF, I, F_DL, nc))
+    sg, cg = vec(WF, I, F_SG, ng), vec(WF, I, F_CG, ng)
+    for g in range(ng):
         sg[g] = math.sin(om[g] * t)
         cg[g] = math.cos(om[g] * t)
     for i in range(n):
@@ -193,11 +232,11 @@ def contact_forces(t, y, cm, ti, tf, wi, wf):
             s -= Cv[e] * y[n + Ci[e]]
         F[i] = s
     power = 0.0
-    for e in range(fi.shape[0]):
+    for e in range(nf):
         load = fs[e] * sg[fg[e]] + fc[e] * cg[fg[e]]
         F[fi[e]] += load
         power += load * y[n + fi[e]]
-    for j in range(cm.shape[0]):
+    for j in range(nc):
         dl = -cgap[j]
         dd = 0.0
         vv = 0.0
@@ -221,15 +260,16 @@ def contact_forces(t, y, cm, ti, tf, wi, wf):
         K = claw[j]
         f = 0.0
         if not IS_STICK[K, mode]:  # noqa: F821
-            f = law_force(K, mode, N, cNd[j], vv, y, 2 * n + cso[j], p, LP, j)  # noqa: F821
+            f = law_force(K, mode, N, cNd[j], vv, y, law_offset(I, j), R, I, j)  # noqa: F821
         cf[j] = f
         for k in range(4):
             i = cidx[j, k]
             if i >= 0:
                 F[i] -= N * cgn[j, k] + f * cgr[j, k]
-    ws, sl, env = wi[0], wi[1], wi[2]
-    ns = ws[0]
+    ns = WI[0]
     if ns > 0:
+        sl, env = wvec(WI, nc, 0), wvec(WI, nc, 1)
+        bst, xst = vec(WF, I, F_B, nc), vec(WF, I, F_X, nc)
         for a in range(ns):
             j = sl[a]
             s = 0.0
@@ -238,9 +278,9 @@ def contact_forces(t, y, cm, ti, tf, wi, wf):
                 if i >= 0:
                     s += cgr[j, k] * invm[i] * F[i]
             bst[a] = s
-        solve_stick(ns, env, wf[7], wf[8], bst, xst)
-        if ws[1] >= 0:
-            least_cone_ratio(y, ti, tf, wi, wf)
+        solve_stick(ns, env, mat(WF, I, F_L, nc, nc), vec(WF, I, F_D, nc), bst, xst)
+        if WI[1] >= 0:
+            least_cone_ratio(y, I, R, WI, WF)
         for a in range(ns):
             j = sl[a]
             cf[j] = xst[a]
@@ -251,22 +291,22 @@ def contact_forces(t, y, cm, ti, tf, wi, wf):
     return power
 
 
-def rhs(t, y, cm, ti, tf, wi, wf, out):
+def rhs(t, y, cm, I, R, WI, WF, out):
     """``dy/dt`` with every contact in its mode ``cm[j]``."""
-    power = contact_forces(t, y, cm, ti, tf, wi, wf)
-    claw, cso, LP = ti[7], ti[8], ti[9]
-    invm, Cp, Ci, Cv, p = tf[0], ti[2], ti[3], tf[2], tf[10]
-    F, cN, cNd, cv, cf = wf[0], wf[1], wf[2], wf[3], wf[4]
-    n = invm.shape[0]
+    power = contact_forces(t, y, cm, I, R, WI, WF)
+    n, nc = I[H_N], I[H_NC]
+    claw = vec(I, I, O_CLAW, nc)
+    invm, F = vec(R, I, R_INVM, n), vec(WF, I, F_F, n)
+    cN, cNd, cv, cf = vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc), vec(WF, I, F_FR, nc)
     for i in range(n):
         out[i] = y[n + i]
         out[n + i] = invm[i] * F[i]
-    for j in range(cm.shape[0]):
-        law_rates(claw[j], cm[j], cN[j], cNd[j], cv[j], cf[j], y, 2 * n + cso[j], p, LP, j, out,  # noqa: F821
-                  2 * n + cso[j])
-    nc = cm.shape[0]
-    n_law = 2 * n + (cso[nc - 1] + NSTATES[claw[nc - 1]] if nc > 0 else 0)  # noqa: F821
+    for j in range(nc):
+        so = law_offset(I, j)
+        law_rates(claw[j], cm[j], cN[j], cNd[j], cv[j], cf[j], y, so, R, I, j, out, so)  # noqa: F821
+    n_law = 2 * n + I[H_NLAW]
     if y.shape[0] > n_law:
+        Cp, Ci, Cv = vec(I, I, O_CP, n + 1), I[I[O_CI]:], R[I[R_CV]:]
         visc = 0.0
         for i in range(n):
             s = 0.0
@@ -274,43 +314,44 @@ def rhs(t, y, cm, ti, tf, wi, wf, out):
                 s += Cv[e] * y[n + Ci[e]]
             visc += y[n + i] * s
         fric = 0.0
-        for j in range(cm.shape[0]):
+        for j in range(nc):
             if cm[j] != 0:
                 fric += law_dissipation(claw[j], cm[j], cN[j], cNd[j], cv[j], cf[j], y,  # noqa: F821
-                                        2 * n + cso[j], p, LP, j)
+                                        law_offset(I, j), R, I, j)
         out[n_law] = power
         out[n_law + 1] = visc
         out[n_law + 2] = fric
 
 
-def rk4_step(t, y, h, cm, ti, tf, wi, wf, k1, k2, k3, k4, tmp, out):
-    """One classical RK4 step of size ``h`` from ``(t, y)`` into ``out``."""
+def rk4_step(t, y, h, cm, I, R, WI, WF, SC, out):
+    """One classical RK4 step of size ``h`` from ``(t, y)`` into ``out`` (stages in ``SC[0:5]``)."""
     n = y.shape[0]
-    rhs(t, y, cm, ti, tf, wi, wf, k1)
+    k1, k2, k3, k4, tmp = SC[0], SC[1], SC[2], SC[3], SC[4]
+    rhs(t, y, cm, I, R, WI, WF, k1)
     for i in range(n):
         tmp[i] = y[i] + 0.5 * h * k1[i]
-    rhs(t + 0.5 * h, tmp, cm, ti, tf, wi, wf, k2)
+    rhs(t + 0.5 * h, tmp, cm, I, R, WI, WF, k2)
     for i in range(n):
         tmp[i] = y[i] + 0.5 * h * k2[i]
-    rhs(t + 0.5 * h, tmp, cm, ti, tf, wi, wf, k3)
+    rhs(t + 0.5 * h, tmp, cm, I, R, WI, WF, k3)
     for i in range(n):
         tmp[i] = y[i] + h * k3[i]
-    rhs(t + h, tmp, cm, ti, tf, wi, wf, k4)
+    rhs(t + h, tmp, cm, I, R, WI, WF, k4)
     for i in range(n):
         out[i] = y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
 
 
 # ---- guards -------------------------------------------------------------------------------
-def eval_guards(t, y, cm, ti, tf, wi, wf, G):
+def eval_guards(t, y, cm, I, R, WI, WF, G):
     """Every contact's guards into ``G[j, :]``: 0 the penetration, then the law's."""
-    contact_forces(t, y, cm, ti, tf, wi, wf)
-    claw, cso, LP = ti[7], ti[8], ti[9]
-    p = tf[10]
-    n = tf[0].shape[0]
-    cN, cNd, cv, cf, cdl = wf[1], wf[2], wf[3], wf[4], wf[5]
-    for j in range(cm.shape[0]):
+    contact_forces(t, y, cm, I, R, WI, WF)
+    nc = I[H_NC]
+    claw = vec(I, I, O_CLAW, nc)
+    cN, cNd, cv, cf, cdl = (vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc),
+                            vec(WF, I, F_FR, nc), vec(WF, I, F_DL, nc))
+    for j in range(nc):
         G[j, 0] = cdl[j]
-        law_guards(claw[j], cm[j], cN[j], cNd[j], cv[j], cf[j], y, 2 * n + cso[j], p, LP, j, G)  # noqa: F821
+        law_guards(claw[j], cm[j], cN[j], cNd[j], cv[j], cf[j], y, law_offset(I, j), R, I, j, G)  # noqa: F821
 
 
 def crossed(g0, g1, direction):
@@ -322,14 +363,16 @@ def crossed(g0, g1, direction):
     return (g0 > 0.0 and g1 <= 0.0) or (g0 < 0.0 and g1 >= 0.0)
 
 
-def first_crossing(cm, claw, G0, G1, fired, use_fired):
+def first_crossing(cm, I, WI, G0, G1, use_fired):
     """``j * GMAX + gi`` of the first guard that crossed (contacts in order), or -1.
 
-    With ``use_fired``, contacts with ``fired[j] != 0`` are passed over: a contact
-    whose transition fired in this event has been settled by its law, and its new
-    mode's guards compared across the bracket mean nothing.
+    With ``use_fired``, contacts whose transition fired in this event are passed
+    over: their law has settled them, and their new mode's guards compared across
+    the bracket mean nothing.
     """
-    for j in range(cm.shape[0]):
+    nc = I[H_NC]
+    claw, fired = vec(I, I, O_CLAW, nc), wvec(WI, nc, 5)
+    for j in range(nc):
         if use_fired and fired[j] != 0:
             continue
         K = claw[j]
@@ -340,38 +383,34 @@ def first_crossing(cm, claw, G0, G1, fired, use_fired):
     return -1
 
 
-def cone_ratio(y, cm, ti, tf, wi, wf):
+def cone_ratio(y, I, R, WI, WF):
     """Largest ``|f| / bound`` over the sticking rigid contacts (after ``contact_forces``)."""
-    ns, sl = wi[0][0], wi[1]
+    ns, nc = WI[0], I[H_NC]
+    sl, cf = wvec(WI, nc, 0), vec(WF, I, F_FR, nc)
     worst = 0.0
     for a in range(ns):
         j = sl[a]
-        b = slip_bound(j, y, ti, tf, wf)
-        r = abs(wf[4][j]) / b if b > 0.0 else (0.0 if wf[4][j] == 0.0 else math.inf)
+        b = slip_bound(j, y, I, R, WF)
+        r = abs(cf[j]) / b if b > 0.0 else (0.0 if cf[j] == 0.0 else math.inf)
         worst = max(worst, r)
     return worst
 
 
 # ---- events -------------------------------------------------------------------------------
-def apply_transition(t, y, cm, j, gi, ti, tf, wi, wf):
+def apply_transition(t, y, cm, j, gi, I, R, WI, WF):
     """Fire guard ``gi`` of contact ``j`` at ``(t, y)``; returns the new mode."""
-    claw, cso, LP = ti[7], ti[8], ti[9]
-    p = tf[10]
-    n = tf[0].shape[0]
-    contact_forces(t, y, cm, ti, tf, wi, wf)
-    K = claw[j]
-    new = law_transition(K, cm[j], gi, wf[1][j], wf[2][j], wf[3][j], wf[4][j], y, 2 * n + cso[j], p,  # noqa: F821
-                         LP, j, wf[13])
-    return new
+    contact_forces(t, y, cm, I, R, WI, WF)
+    K = I[I[O_CLAW] + j]
+    return law_transition(K, cm[j], gi, WF[I[F_N] + j], WF[I[F_ND] + j], WF[I[F_V] + j],  # noqa: F821
+                          WF[I[F_FR] + j], y, law_offset(I, j), R, I, j, vec(WF, I, F_Z, MAX_LAW_STATES))
 
 
-def project_onto_stick(y, ti, tf, wi, wf):
+def project_onto_stick(y, I, R, WI, WF):
     """Project the velocities onto zero slip of every sticking contact (``u -= M^-1 G^T W^-1 G u``)."""
-    cidx = ti[6]
-    invm, cgr = tf[0], tf[7]
-    ns, sl, env = wi[0][0], wi[1], wi[2]
-    bst, xst = wf[10], wf[6]
-    n = invm.shape[0]
+    n, nc, ns = I[H_N], I[H_NC], WI[0]
+    cidx, cgr, invm = mat(I, I, O_CIDX, nc, 4), mat(R, I, R_GR, nc, 4), vec(R, I, R_INVM, n)
+    sl, env = wvec(WI, nc, 0), wvec(WI, nc, 1)
+    bst, xst = vec(WF, I, F_B, nc), vec(WF, I, F_X, nc)
     for a in range(ns):
         j = sl[a]
         s = 0.0
@@ -380,7 +419,7 @@ def project_onto_stick(y, ti, tf, wi, wf):
             if i >= 0:
                 s += cgr[j, k] * y[n + i]
         bst[a] = s
-    solve_stick(ns, env, wf[7], wf[8], bst, xst)
+    solve_stick(ns, env, mat(WF, I, F_L, nc, nc), vec(WF, I, F_D, nc), bst, xst)
     for a in range(ns):
         j = sl[a]
         for k in range(4):
@@ -389,7 +428,7 @@ def project_onto_stick(y, ti, tf, wi, wf):
                 y[n + i] -= invm[i] * cgr[j, k] * xst[a]
 
 
-def resolve_friction(t, y, cm, ti, tf, wi, wf, counters, max_pivots):
+def resolve_friction(t, y, cm, I, R, WI, WF, counters, max_pivots):
     """Modes of the contacts in ``U`` from the friction complementarity problem.
 
     With the normal loads fixed, each contact of ``U`` either sticks (zero relative
@@ -403,38 +442,37 @@ def resolve_friction(t, y, cm, ti, tf, wi, wf, counters, max_pivots):
 
     Returns True if resolved, False at the pivot cap.
     """
-    claw, cidx = ti[7], ti[6]
-    invm, cgr, W = tf[0], tf[7], tf[11]
-    U, cm0 = wi[3], wi[4]
-    yev = wf[14]
-    F = wf[0]
-    n = invm.shape[0]
-    nc = cm.shape[0]
+    n, nc = I[H_N], I[H_NC]
+    claw, cidx = vec(I, I, O_CLAW, nc), mat(I, I, O_CIDX, nc, 4)
+    invm, cgr, W = vec(R, I, R_INVM, n), mat(R, I, R_GR, nc, 4), mat(R, I, R_W, nc, nc)
+    U, cm0 = wvec(WI, nc, 2), wvec(WI, nc, 3)
+    yev = vec(WF, I, F_YEV, y.shape[0])
+    F, cf = vec(WF, I, F_F, n), vec(WF, I, F_FR, nc)
     for i in range(y.shape[0]):
         yev[i] = y[i]
     for it in range(max_pivots):
         for i in range(y.shape[0]):
             y[i] = yev[i]
-        factor_stick(cm, ti, tf, wi, wf)
+        factor_stick(cm, I, R, WI, WF)
         newly = False
         for j in range(nc):
             K = claw[j]
             if IS_STICK[K, cm[j]] and not IS_STICK[K, cm0[j]]:  # noqa: F821
                 newly = True
         if newly:
-            project_onto_stick(y, ti, tf, wi, wf)
-        contact_forces(t, y, cm, ti, tf, wi, wf)
+            project_onto_stick(y, I, R, WI, WF)
+        contact_forces(t, y, cm, I, R, WI, WF)
         flip = -1
         for j in range(nc):
             if not U[j]:
                 continue
             K = claw[j]
             m = cm[j]
-            b = slip_bound(j, y, ti, tf, wf)
+            b = slip_bound(j, y, I, R, WF)
             if m == RIGID[K, 0]:  # noqa: F821
-                if b - abs(wf[4][j]) < 0.0:
+                if b - abs(cf[j]) < 0.0:
                     flip = j
-                    cm[j] = RIGID[K, 1] if wf[4][j] > 0.0 else RIGID[K, 2]  # noqa: F821
+                    cm[j] = RIGID[K, 1] if cf[j] > 0.0 else RIGID[K, 2]  # noqa: F821
                     break
             else:
                 s = 1.0 if m == RIGID[K, 1] else -1.0  # noqa: F821
@@ -453,16 +491,16 @@ def resolve_friction(t, y, cm, ti, tf, wi, wf, counters, max_pivots):
     return False
 
 
-def rigid_problem(cm, ti, wi):
+def rigid_problem(cm, I, WI):
     """Mark in ``U`` the closed rigid contacts whose mode an event leaves open; True if any.
 
     Those are the contacts sticking before the event (``cm0``) or sent to stick by
     it: a slipping contact whose velocity has not reached zero keeps its slip.
     """
-    claw = ti[7]
-    U, cm0 = wi[3], wi[4]
+    nc = I[H_NC]
+    claw, U, cm0 = vec(I, I, O_CLAW, nc), wvec(WI, nc, 2), wvec(WI, nc, 3)
     anyu = False
-    for j in range(cm.shape[0]):
+    for j in range(nc):
         K = claw[j]
         u = False
         if RIGID[K, 0] >= 0 and cm[j] != 0:  # noqa: F821
@@ -488,17 +526,17 @@ def log_event(t, j, gi, old, new, log_t, log_c, log_g, log_from, log_to, counter
     counters[C_EVENTS] += 1
 
 
-def settle_event(t, y, cm, ti, tf, wi, wf, counters, max_pivots, log_t, log_c, log_g, log_from, log_to,
+def settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log_g, log_from, log_to,
                  recording):
     """After guard transitions: the friction problem of the rigid contacts, logged; False if unresolved."""
-    cm0, fired = wi[4], wi[6]
+    nc = I[H_NC]
+    cm0, before, fired = wvec(WI, nc, 3), wvec(WI, nc, 4), wvec(WI, nc, 5)
     ok = True
-    if rigid_problem(cm, ti, wi):
-        before = wi[5]
-        for j in range(cm.shape[0]):
+    if rigid_problem(cm, I, WI):
+        for j in range(nc):
             before[j] = cm[j]
-        ok = resolve_friction(t, y, cm, ti, tf, wi, wf, counters, max_pivots)
-        for j in range(cm.shape[0]):
+        ok = resolve_friction(t, y, cm, I, R, WI, WF, counters, max_pivots)
+        for j in range(nc):
             if cm[j] == before[j]:
                 continue
             if fired[j] != 0:
@@ -509,34 +547,50 @@ def settle_event(t, y, cm, ti, tf, wi, wf, counters, max_pivots, log_t, log_c, l
             else:
                 log_event(t, j, -1, before[j], cm[j], log_t, log_c, log_g, log_from, log_to, counters,
                           recording, fired)
-    factor_stick(cm, ti, tf, wi, wf)
-    for j in range(cm.shape[0]):
+    factor_stick(cm, I, R, WI, WF)
+    for j in range(nc):
         cm0[j] = cm[j]
         fired[j] = 0
     return ok
 
 
-def initial_modes(t, y, cm, ti, tf, wi, wf, sc, counters, max_pivots, e, ei):
+def initial_modes(t, y, cm, I, R, WI, WF, G, counters, max_pivots, e, ei):
     """Close every contact with penetration ``>= 0`` through its law's entry rule; resolve friction.
 
-    ``e`` and ``ei`` are empty float and int arrays (no event log).
+    ``G`` is guard scratch ``(nc, GMAX)``; ``e`` and ``ei`` are empty float and int
+    arrays (no event log).
     """
-    claw = ti[7]
-    cm0 = wi[4]
-    G = sc[8]
-    for j in range(cm.shape[0]):
+    nc = I[H_NC]
+    claw, cm0 = vec(I, I, O_CLAW, nc), wvec(WI, nc, 3)
+    for j in range(nc):
         cm[j] = 0
         cm0[j] = 0
-    factor_stick(cm, ti, tf, wi, wf)
-    eval_guards(t, y, cm, ti, tf, wi, wf, G)
-    for j in range(cm.shape[0]):
+    factor_stick(cm, I, R, WI, WF)
+    eval_guards(t, y, cm, I, R, WI, WF, G)
+    for j in range(nc):
         if G[j, 0] >= 0.0 and NG[claw[j], 0] > 0:  # noqa: F821
-            cm[j] = apply_transition(t, y, cm, j, 0, ti, tf, wi, wf)
-            factor_stick(cm, ti, tf, wi, wf)
-    return settle_event(t, y, cm, ti, tf, wi, wf, counters, max_pivots, e, ei, ei, ei, ei, False)
+            cm[j] = apply_transition(t, y, cm, j, 0, I, R, WI, WF)
+            factor_stick(cm, I, R, WI, WF)
+    return settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, e, ei, ei, ei, ei, False)
 
 
-def integrate(y, cm, ti, tf, wi, wf, sc, period, steps_per_period, start_period, end_period, n_transient,
+def record(irec, t, y, cm, I, R, WI, WF, rec_t, rec_y, rec_cm, rec_N, rec_f):
+    """Write record ``irec`` (state, contact modes and, if kept, contact forces)."""
+    n, nc = y.shape[0], I[H_NC]
+    rec_t[irec] = t
+    for i in range(n):
+        rec_y[irec, i] = y[i]
+    keep = rec_N.shape[0] > 0
+    if keep:
+        contact_forces(t, y, cm, I, R, WI, WF)
+    for j in range(nc):
+        rec_cm[irec, j] = cm[j]
+        if keep:
+            rec_N[irec, j] = WF[I[F_N] + j]
+            rec_f[irec, j] = WF[I[F_FR] + j]
+
+
+def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_period, end_period, n_transient,
               record_every, event_tol, max_events, max_pivots, rec_t, rec_y, rec_cm, rec_N, rec_f, poincare,
               log_t, log_c, log_g, log_from, log_to, counters, stats):
     """Integrate excitation periods ``start_period`` to ``end_period`` (exclusive).
@@ -551,41 +605,35 @@ def integrate(y, cm, ti, tf, wi, wf, sc, period, steps_per_period, start_period,
     Returns ``(status, t)``.
     """
     n = y.shape[0]
-    nc = cm.shape[0]
-    claw = ti[7]
+    nc = I[H_NC]
+    fired = wvec(WI, nc, 5)
     h = period / steps_per_period
-    k1, k2, k3, k4, tmp, y1, ymid, ysub, G0, G1, Gm, Gs = sc
-    keep_forces = rec_N.shape[0] > 0
+    y1, ymid, ysub = SC[5], SC[6], SC[7]
+    G0, G1, Gm, Gs = GS[0], GS[1], GS[2], GS[3]
     t = period * start_period
     irec = counters[C_RECORDS]
     g0_valid = False
-    factor_stick(cm, ti, tf, wi, wf)
+    factor_stick(cm, I, R, WI, WF)
+    cm0 = wvec(WI, nc, 3)
     for j in range(nc):
-        wi[4][j] = cm[j]
+        cm0[j] = cm[j]
+        fired[j] = 0
     for per in range(start_period, end_period):
         recording = per >= n_transient
         if recording and per == n_transient and irec < rec_t.shape[0]:
-            rec_t[irec] = t
-            for i in range(n):
-                rec_y[irec, i] = y[i]
-            contact_forces(t, y, cm, ti, tf, wi, wf)
-            for j in range(nc):
-                rec_cm[irec, j] = cm[j]
-                if keep_forces:
-                    rec_N[irec, j] = wf[1][j]
-                    rec_f[irec, j] = wf[4][j]
+            record(irec, t, y, cm, I, R, WI, WF, rec_t, rec_y, rec_cm, rec_N, rec_f)
             irec += 1
         for js in range(steps_per_period):
             t_end = period * per + (js + 1) * h
             n_events = 0
             while t < t_end:
                 dt = t_end - t
-                rk4_step(t, y, dt, cm, ti, tf, wi, wf, k1, k2, k3, k4, tmp, y1)
+                rk4_step(t, y, dt, cm, I, R, WI, WF, SC, y1)
                 counters[C_RHS] += 4
                 if not g0_valid:
-                    eval_guards(t, y, cm, ti, tf, wi, wf, G0)
-                eval_guards(t_end, y1, cm, ti, tf, wi, wf, G1)
-                if first_crossing(cm, claw, G0, G1, wi[6], False) < 0:
+                    eval_guards(t, y, cm, I, R, WI, WF, G0)
+                eval_guards(t_end, y1, cm, I, R, WI, WF, G1)
+                if first_crossing(cm, I, WI, G0, G1, False) < 0:
                     for i in range(n):
                         y[i] = y1[i]
                     for j in range(nc):
@@ -593,18 +641,18 @@ def integrate(y, cm, ti, tf, wi, wf, sc, period, steps_per_period, start_period,
                             G0[j, gi] = G1[j, gi]
                     g0_valid = True
                     t = t_end
-                    if wi[0][0] > 0:
-                        stats[S_MAX_CONE_RATIO] = max(stats[S_MAX_CONE_RATIO], cone_ratio(y, cm, ti, tf, wi, wf))
+                    if WI[0] > 0:
+                        stats[S_MAX_CONE_RATIO] = max(stats[S_MAX_CONE_RATIO], cone_ratio(y, I, R, WI, WF))
                     break
                 lo = 0.0
                 hi = 1.0
                 while (hi - lo) * dt > event_tol * h:
                     mid = 0.5 * (lo + hi)
-                    rk4_step(t, y, mid * dt, cm, ti, tf, wi, wf, k1, k2, k3, k4, tmp, ymid)
-                    eval_guards(t + mid * dt, ymid, cm, ti, tf, wi, wf, Gm)
+                    rk4_step(t, y, mid * dt, cm, I, R, WI, WF, SC, ymid)
+                    eval_guards(t + mid * dt, ymid, cm, I, R, WI, WF, Gm)
                     counters[C_BISECTIONS] += 1
                     counters[C_RHS] += 4
-                    if first_crossing(cm, claw, G0, Gm, wi[6], False) >= 0:
+                    if first_crossing(cm, I, WI, G0, Gm, False) >= 0:
                         hi = mid
                         for i in range(n):
                             y1[i] = ymid[i]
@@ -613,7 +661,7 @@ def integrate(y, cm, ti, tf, wi, wf, sc, period, steps_per_period, start_period,
                                 G1[j, gi] = Gm[j, gi]
                     else:
                         lo = mid
-                code = first_crossing(cm, claw, G0, G1, wi[6], False)
+                code = first_crossing(cm, I, WI, G0, G1, False)
                 t_sub = t
                 for i in range(n):
                     ysub[i] = y[i]
@@ -624,18 +672,18 @@ def integrate(y, cm, ti, tf, wi, wf, sc, period, steps_per_period, start_period,
                     j = code // GMAX  # noqa: F821
                     gi = code - j * GMAX  # noqa: F821
                     old = cm[j]
-                    cm[j] = apply_transition(t, y, cm, j, gi, ti, tf, wi, wf)
+                    cm[j] = apply_transition(t, y, cm, j, gi, I, R, WI, WF)
                     log_event(t, j, gi, old, cm[j], log_t, log_c, log_g, log_from, log_to, counters, recording,
-                              wi[6])
+                              fired)
                     n_events += 1
                     if n_events > max_events:
                         counters[C_RECORDS] = irec
                         return STATUS_EVENT_STORM, t
-                    factor_stick(cm, ti, tf, wi, wf)
-                    eval_guards(t_sub, ysub, cm, ti, tf, wi, wf, Gs)
-                    eval_guards(t, y, cm, ti, tf, wi, wf, G1)
-                    code = first_crossing(cm, claw, Gs, G1, wi[6], True)
-                if not settle_event(t, y, cm, ti, tf, wi, wf, counters, max_pivots, log_t, log_c, log_g,
+                    factor_stick(cm, I, R, WI, WF)
+                    eval_guards(t_sub, ysub, cm, I, R, WI, WF, Gs)
+                    eval_guards(t, y, cm, I, R, WI, WF, G1)
+                    code = first_crossing(cm, I, WI, Gs, G1, True)
+                if not settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log_g,
                                     log_from, log_to, recording):
                     counters[C_RECORDS] = irec
                     return STATUS_FRICTION_UNRESOLVED, t
@@ -646,16 +694,7 @@ def integrate(y, cm, ti, tf, wi, wf, sc, period, steps_per_period, start_period,
                     counters[C_RECORDS] = irec
                     return STATUS_NONFINITE, t
             if recording and (js + 1) % record_every == 0 and irec < rec_t.shape[0]:
-                rec_t[irec] = t
-                for i in range(n):
-                    rec_y[irec, i] = y[i]
-                if keep_forces:
-                    contact_forces(t, y, cm, ti, tf, wi, wf)
-                for j in range(nc):
-                    rec_cm[irec, j] = cm[j]
-                    if keep_forces:
-                        rec_N[irec, j] = wf[1][j]
-                        rec_f[irec, j] = wf[4][j]
+                record(irec, t, y, cm, I, R, WI, WF, rec_t, rec_y, rec_cm, rec_N, rec_f)
                 irec += 1
         if recording:
             for i in range(n):

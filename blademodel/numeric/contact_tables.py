@@ -202,15 +202,7 @@ class NumericTables:
         self.claw = np.array(law_kind, dtype=np.int64)
         self.cso = np.array(state_offset, dtype=np.int64)
         self.p = np.array([values[name] for name in param_order], dtype=float)
-
-    def int_tables(self) -> tuple:
-        """``ti`` of :mod:`.contact_loop`."""
-        return (*self.K[:2], *self.C[:2], self.forcing[0], self.forcing[1], self.cidx, self.claw, self.cso, self.LP)
-
-    def float_tables(self) -> tuple:
-        """``tf`` of :mod:`.contact_loop`."""
-        return (self.invm, self.K[2], self.C[2], self.forcing[2], self.forcing[3], self.forcing[4], self.cgn,
-                self.cgr, self.cgap, self.ck, self.p, self.W)
+        self.n_law = 0  # set by the integrator: law states in all
 
     def stiffness_matrix(self) -> np.ndarray:
         """Dense ``K`` of the springs (for energies and checks)."""

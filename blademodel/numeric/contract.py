@@ -39,3 +39,23 @@ N_STATS = 1
 
 #: Names of the float statistics, in index order.
 STAT_NAMES = ("max_cone_ratio",)
+
+# ---- the per-contact kernel's run buffer --------------------------------------------------
+# The per-contact kernel takes its tables and work arrays as four flat arrays, ``I``
+# (int64) and ``R`` (float64) for the model, ``WI`` and ``WF`` for work, because a
+# compiled call passes each array as a struct of 7 to 9 words: with the tables as
+# 40 separate arrays a call cost about 0.6 us. The header of ``I`` gives the sizes and
+# the offset of every table (``blademodel.numeric.contact_kernel.pack_tables``).
+H_N = 0        #: number of coordinates n
+H_NC = 1       #: number of contacts nc
+H_NF = 2       #: forcing entries
+H_NG = 3       #: frequency groups
+H_LPW = 4      #: columns of the law parameter-index table
+H_NLAW = 5     #: law states in all (after q and u)
+O_KP, O_KI, O_CP, O_CI, O_FI, O_FG, O_CIDX, O_CLAW, O_CSO, O_LP = range(6, 16)   #: offsets into I
+R_INVM, R_KV, R_CV, R_FS, R_FC, R_OM, R_GN, R_GR, R_GAP, R_K, R_P, R_W = range(16, 28)  #: offsets into R
+F_F, F_N, F_ND, F_V, F_FR, F_DL, F_X, F_D, F_NULL, F_B, F_SG, F_CG, F_Z, F_YEV, F_L = range(28, 43)  #: into WF
+H_SIZE = 43    #: header length
+#: Frequency groups and law states the work buffer holds.
+MAX_GROUPS = 8
+MAX_LAW_STATES = 64

@@ -5,25 +5,26 @@ scalar context symbols: the contact's normal force ``N``, its rate ``Nd``, the
 relative tangential velocity ``v`` and the friction force ``f``, which the kernel
 computes for each contact at run time. The law's states are read from the state
 vector at the contact's offset (``y[so + i]``) and its parameters through the
-contact's row of the parameter-index table (``p[LP[j, k]]``), so one compiled
+contact's row of the parameter-index table (``p[LP[j, k]]``, in the kernel's flat
+buffers ``R`` and ``I``: :mod:`blademodel.numeric.contract`), so one compiled
 function serves every contact of that law, whatever the number of contacts.
 
 Functions written for law kind ``K`` (``mode`` 0 is ``open``, ``1..`` the law's
 modes in order; guard 0 of every mode is the penetration guard, ``close`` when
 open and ``open`` when closed, the law's guards follow from 1):
 
-``lawK_force(mode, N, Nd, v, y, so, p, LP, j)``
+``lawK_force(mode, N, Nd, v, y, so, R, I, j)``
     Friction force of an explicit-force mode (0 when open or in a rigid stick mode).
-``lawK_rates(mode, N, Nd, v, f, y, so, p, LP, j, out, oo)``
+``lawK_rates(mode, N, Nd, v, f, y, so, R, I, j, out, oo)``
     Rates of the law's states into ``out[oo + i]``.
-``lawK_guards(mode, N, Nd, v, f, y, so, p, LP, j, G)``
+``lawK_guards(mode, N, Nd, v, f, y, so, R, I, j, G)``
     Law guard values into ``G[j, 1 + i]``.
-``lawK_transition(mode, gi, N, Nd, v, f, y, so, p, LP, j, ztmp)``
+``lawK_transition(mode, gi, N, Nd, v, f, y, so, R, I, j, ztmp)``
     Apply guard ``gi``'s first admissible candidate (reset into ``y``) and return the
     target mode. A candidate whose target is a rigid stick mode is taken at once,
     reset applied: the kernel then decides stick or slip for that contact together
     with every other sticking contact (the friction complementarity problem).
-``lawK_energy(y, so, p, LP, j)``, ``lawK_dissipation(mode, N, Nd, v, f, y, so, p, LP, j)``
+``lawK_energy(y, so, R, I, j)``, ``lawK_dissipation(mode, N, Nd, v, f, y, so, R, I, j)``
     Stored energy of the law's states; friction power ``f v - dE/dt``.
 """
 
@@ -103,7 +104,7 @@ def _names(ctx: ContactContext, state_array: str = "y") -> dict:
     for i, s in enumerate(ctx.states.values()):
         out[s] = f"{state_array}[so + {i}]" if state_array == "y" else f"{state_array}[{i}]"
     for k, s in enumerate(ctx.params.values()):
-        out[s] = f"p[LP[j, {k}]]"
+        out[s] = f"R[I[R_P] + I[I[O_LP] + j * I[H_LPW] + {k}]]"
     return out
 
 
@@ -164,7 +165,7 @@ def law_code(law: FrictionLaw, K: int) -> LawCode:
         return f"    {'if' if first else 'elif'} mode == {m}:"
 
     # force
-    L.append(f"def law{K}_force(mode, N, Nd, v, y, so, p, LP, j):")
+    L.append(f"def law{K}_force(mode, N, Nd, v, y, so, R, I, j):")
     for m in range(1, len(modes)):
         if explicit[m] != 0:
             L.append(f"    if mode == {m}:")
@@ -174,7 +175,7 @@ def law_code(law: FrictionLaw, K: int) -> LawCode:
     L.append("")
 
     # rates
-    L.append(f"def law{K}_rates(mode, N, Nd, v, f, y, so, p, LP, j, out, oo):")
+    L.append(f"def law{K}_rates(mode, N, Nd, v, f, y, so, R, I, j, out, oo):")
     body = []
     for m, mode in enumerate(modes):
         r = law.open_rates(ctx) if m == 0 else law.rates(mode, ctx)
@@ -188,7 +189,7 @@ def law_code(law: FrictionLaw, K: int) -> LawCode:
 
     # guards
     guard_names, guard_dirs, guard_lists = [], [], []
-    L.append(f"def law{K}_guards(mode, N, Nd, v, f, y, so, p, LP, j, G):")
+    L.append(f"def law{K}_guards(mode, N, Nd, v, f, y, so, R, I, j, G):")
     body = []
     for m, mode in enumerate(modes):
         gl = [] if m == 0 else list(law.guards(mode, ctx))
@@ -205,7 +206,7 @@ def law_code(law: FrictionLaw, K: int) -> LawCode:
     L.append("")
 
     # transitions
-    L.append(f"def law{K}_transition(mode, gi, N, Nd, v, f, y, so, p, LP, j, ztmp):")
+    L.append(f"def law{K}_transition(mode, gi, N, Nd, v, f, y, so, R, I, j, ztmp):")
     first = True
     for m, mode in enumerate(modes):
         if m == 0:
@@ -243,11 +244,11 @@ def law_code(law: FrictionLaw, K: int) -> LawCode:
 
     # energy and friction power
     E = sp.sympify(law.stored_energy(ctx))
-    L.append(f"def law{K}_energy(y, so, p, LP, j):")
+    L.append(f"def law{K}_energy(y, so, R, I, j):")
     L += _assign([E], ["e"], pr, " " * 4, "x")
     L.append("    return e")
     L.append("")
-    L.append(f"def law{K}_dissipation(mode, N, Nd, v, f, y, so, p, LP, j):")
+    L.append(f"def law{K}_dissipation(mode, N, Nd, v, f, y, so, R, I, j):")
     body = []
     for m in range(1, len(modes)):
         r = law.rates(modes[m], ctx)
