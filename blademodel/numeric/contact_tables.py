@@ -53,19 +53,27 @@ def derive_tables(model: Model) -> dict:
     coords = list(model.coordinates)
     q = {c: sp.Symbol(c, real=True) for c in coords}
     u = {c: sp.Symbol(f"v{c}", real=True) for c in coords}
-    zero = {**{s: 0 for s in q.values()}, **{s: 0 for s in u.values()}}
+    linear_symbols = set(q.values()) | set(u.values()) | {t}
     idx = {c: i for i, c in enumerate(coords)}
     inertia = {m.coordinate(d): str(m.inertia(d).symbol) for m in model.masses for d in m.dofs}
+
+    by_symbol = {**{s: c for c, s in q.items()}, **{s: c for c, s in u.items()}}
+
+    def involved(expr, var):
+        """Coordinates whose ``var`` symbol appears in ``expr`` (never a scan of all coordinates)."""
+        names = {by_symbol[s] for s in sp.sympify(expr).free_symbols if s in by_symbol}
+        return [c for c in names if var[c] in expr.free_symbols]
 
     def linear(comps, var, what):
         out = []
         for comp in comps:
             for c, load in comp.loads(q, u, t).items():
-                for c2 in coords:
+                load = sp.sympify(load)
+                for c2 in sorted(involved(load, var), key=idx.get):
                     coef = -sp.diff(load, var[c2])
                     if coef == 0:
                         continue
-                    if coef.free_symbols & (set(q.values()) | set(u.values()) | {t}):
+                    if coef.free_symbols & linear_symbols:
                         raise ValueError(f"{what} on {c}: the per-contact kernel needs linear loads, got {load}")
                     out.append([idx[c], idx[c2], str(coef)])
         return out
@@ -82,17 +90,19 @@ def derive_tables(model: Model) -> dict:
                 raise ValueError(f"force on {c}: the per-contact kernel takes harmonic loads A sin(w t + phi), "
                                  f"got {load}")
             forcing.append([idx[c], str(m[A]), str(m[W]), str(m[P])])
+            if (sp.sympify(m[A]).free_symbols | sp.sympify(m[W]).free_symbols) & linear_symbols:
+                raise ValueError(f"force on {c}: the amplitude and frequency must not depend on the state")
 
     contacts = []
     for ct in model.contacts:
         delta = ct.penetration(q)
         slip = ct.relative_slip(q)
         slots, gn, gr = [], [], []
-        for c in coords:
+        for c in sorted(set(involved(delta, q)) | set(involved(slip, q)), key=idx.get):
             dn, dr = sp.diff(delta, q[c]), sp.diff(slip, q[c])
             if dn == 0 and dr == 0:
                 continue
-            if (dn.free_symbols | dr.free_symbols) & set(q.values()):
+            if (dn.free_symbols | dr.free_symbols) & linear_symbols:
                 raise ValueError(f"contact {ct.name}: the per-contact kernel needs a projection affine in the "
                                  f"coordinates")
             slots.append(idx[c])
@@ -100,7 +110,7 @@ def derive_tables(model: Model) -> dict:
             gr.append(str(dr))
         if len(slots) > 4:
             raise ValueError(f"contact {ct.name} moves {len(slots)} coordinates; at most 4 (two 2-D bodies)")
-        contacts.append({"slots": slots, "gn": gn, "gr": gr, "gap": str(-delta.subs(zero)),
+        contacts.append({"slots": slots, "gn": gn, "gr": gr, "gap": str(-delta.xreplace({q[c]: 0 for c in involved(delta, q)})),
                          "k": str(ct.parameters()["k"].symbol),
                          "law": [str(p.symbol) for p in ct.friction.parameters().values()]})
     return {"coordinates": coords, "inertia": [inertia[c] for c in coords],

@@ -6,17 +6,38 @@ projection on the coordinates. A Lagrangian/Kane formulation would give the same
 equations with more machinery; the direct assembly keeps each load visible and
 makes the stick constraint force a plain linear solve. ``tests/test_assembly.py``
 checks the smooth part against ``sympy.physics.mechanics.LagrangesMethod``.
+
+Three entry points share the same pieces:
+
+* :func:`derive` derives every mode, the product of all contacts' modes (the
+  single-contact kernel compiles them all);
+* :func:`derive_mode` derives *one* mode assignment (``{"c1": "stick"}``, the
+  others open) with its guards, at a cost that grows with the model, not with
+  the number of mode combinations (a bladed disk has ``4**24`` of them);
+* :func:`contact_equations` gives one contact's own equations: penetration,
+  relative slip, normal force and its friction law in each of its modes.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
+from dataclasses import dataclass
+from typing import Callable, Mapping
 
 import sympy as sp
 
-from ..components.friction.base import STICK, Candidate, ContactContext
+from ..components.friction.base import STICK, Candidate, ContactContext, Guard
 from ..model import Model
-from .system import GuardSpec, HybridSystem, Mode, Transition
+from .system import (
+    ContactEquations,
+    ContactModeEquations,
+    GuardSpec,
+    HybridSystem,
+    Mode,
+    ModeSystem,
+    Transition,
+)
 
 
 def _state_symbols(model: Model):
@@ -42,17 +63,36 @@ def _tidy(expr):
     return sp.expand(num) / sp.factor(sp.trigsimp(den))
 
 
-def derive(model: Model) -> HybridSystem:
-    """Derive every reachable mode of ``model`` with its flow, guards and transitions.
+# --- the pieces every mode is made of ------------------------------------------------------
 
-    Parameters
-    ----------
-    model : Model
+@dataclass
+class _Assembly:
+    """What does not depend on the mode: symbols, masses, smooth loads, contact geometry."""
 
-    Returns
-    -------
-    HybridSystem
-    """
+    model: Model
+    t: sp.Symbol
+    q: dict
+    u: dict
+    s: dict
+    coords: list
+    params: list
+    masses: dict
+    M: sp.Matrix
+    F_smooth: dict
+    contacts: tuple
+    ctxs: list
+    geom: list
+    f_sym: list
+    N_sym: list
+    state_syms: list
+
+    @property
+    def Minv(self) -> sp.Matrix:
+        return sp.diag(*[1 / self.masses[c] for c in self.coords])
+
+
+def _assemble(model: Model) -> _Assembly:
+    """The mode-independent part of the derivation (linear in the model's size)."""
     t = sp.Symbol("t", real=True)
     q, u, s = _state_symbols(model)
     coords = list(model.coordinates)
@@ -84,83 +124,136 @@ def derive(model: Model) -> HybridSystem:
                      "dr": {cc: sp.diff(slip, q[cc]) for cc in coords}})
 
     state_syms = [s[(c.name, st)] for c in contacts for st in c.friction.states]
-    local_modes = [c.modes for c in contacts]
-    combos = list(itertools.product(*local_modes)) if contacts else [()]
+    return _Assembly(model, t, q, u, s, coords, params, masses, M, F_smooth, contacts, ctxs, geom,
+                     f_sym, N_sym, state_syms)
 
-    def mode_name(combo):
-        if not contacts:
-            return "free"
-        if len(contacts) == 1:
-            return combo[0]
-        return ",".join(f"{c.name}={m}" for c, m in zip(contacts, combo))
 
-    def law_mode(j, combo):
-        return None if combo[j] == "open" else combo[j]
+def _mode_name(contacts, combo) -> str:
+    if not contacts:
+        return "free"
+    if len(contacts) == 1:
+        return combo[0]
+    return ",".join(f"{c.name}={m}" for c, m in zip(contacts, combo))
 
-    # --- flows ------------------------------------------------------------------
-    display_F = {}
-    modes: list[Mode] = []
-    for combo in combos:
-        F = dict(F_smooth)
-        Fdisp = dict(F_smooth)
-        Nj, fj, constrained = [], [], []
-        for j, c in enumerate(contacts):
-            lm = law_mode(j, combo)
-            if lm is None:
-                Nj.append(sp.Integer(0))
-                fj.append(sp.Integer(0))
-                continue
-            Nj.append(ctxs[j].N)
-            force = c.friction.force(lm, ctxs[j])
-            if force is STICK:
-                constrained.append(j)
-                fj.append(None)
-            else:
-                fj.append(force)
-            for cc in coords:
-                F[cc] += -ctxs[j].N * geom[j]["dn"][cc]
-                Fdisp[cc] += -N_sym[j] * geom[j]["dn"][cc] - f_sym[j] * geom[j]["dr"][cc]
-                if force is not STICK:
-                    F[cc] += -force * geom[j]["dr"][cc]
-        Fvec = sp.Matrix([F[c] for c in coords])
-        Minv = sp.diag(*[1 / masses[c] for c in coords])
-        if constrained:
-            # a = M^-1 (F - J^T lam);  J a = 0  ->  (J M^-1 J^T) lam = J M^-1 F
-            J = sp.Matrix([[geom[j]["dr"][c] for c in coords] for j in constrained])
-            A = J * Minv * J.T
-            lam = A.LUsolve(J * Minv * Fvec)
-            lam = [_tidy(x) for x in lam]
-            for i, j in enumerate(constrained):
-                fj[j] = lam[i]
-            Fvec = Fvec - J.T * sp.Matrix(lam)
-        acc = [sp.expand(x) for x in Minv * Fvec]
-        rates = []
-        for j, c in enumerate(contacts):
-            lm = law_mode(j, combo)
-            sub = {f_sym[j]: fj[j]}
-            r = c.friction.rates(lm, ctxs[j]) if lm else c.friction.open_rates(ctxs[j])
-            for st in c.friction.states:
-                rates.append(sp.sympify(r.get(st, 0)).xreplace(sub))
-        display_F[mode_name(combo)] = Fdisp
-        modes.append(Mode(mode_name(combo), combo, acc, rates, Nj, fj, constrained))
 
-    index = {m.local: i for i, m in enumerate(modes)}
-    u_vec = sp.Matrix([u[c] for c in coords])
-    Minv = sp.diag(*[1 / masses[c] for c in coords])
+def _law_mode(combo, j):
+    """The friction law's mode of contact ``j``, ``None`` when the contact is open."""
+    return None if combo[j] == "open" else combo[j]
 
-    def projection(target: Mode) -> dict:
-        """Velocity reset onto ``v = 0`` of every stick constraint of ``target``."""
-        if not target.constrained:
-            return {}
-        J = sp.Matrix([[geom[j]["dr"][c] for c in coords] for j in target.constrained])
+
+def _local_force(asm: _Assembly, combo, j):
+    """Friction force of contact ``j`` in ``combo`` from its law alone: an expression or ``STICK``."""
+    lm = _law_mode(combo, j)
+    return sp.Integer(0) if lm is None else asm.contacts[j].friction.force(lm, asm.ctxs[j])
+
+
+def _contact_forces(asm: _Assembly, combo):
+    """Loads of ``combo`` with the stick forces solved jointly.
+
+    Returns
+    -------
+    Fvec : sympy.Matrix
+        Generalized forces, the solved stick constraint forces included.
+    Fdisp : dict
+        The same with ``N_c`` and ``f_c`` kept as symbols (display).
+    Nj, fj : list
+        Normal and friction force of every contact.
+    constrained : list of int
+    """
+    coords, geom = asm.coords, asm.geom
+    F = dict(asm.F_smooth)
+    Fdisp = dict(asm.F_smooth)
+    Nj, fj, constrained = [], [], []
+    for j, c in enumerate(asm.contacts):
+        lm = _law_mode(combo, j)
+        if lm is None:
+            Nj.append(sp.Integer(0))
+            fj.append(sp.Integer(0))
+            continue
+        Nj.append(asm.ctxs[j].N)
+        force = c.friction.force(lm, asm.ctxs[j])
+        if force is STICK:
+            constrained.append(j)
+            fj.append(None)
+        else:
+            fj.append(force)
+        for cc in coords:
+            F[cc] += -asm.ctxs[j].N * geom[j]["dn"][cc]
+            Fdisp[cc] += -asm.N_sym[j] * geom[j]["dn"][cc] - asm.f_sym[j] * geom[j]["dr"][cc]
+            if force is not STICK:
+                F[cc] += -force * geom[j]["dr"][cc]
+    Fvec = sp.Matrix([F[c] for c in coords])
+    Minv = asm.Minv
+    if constrained:
+        # a = M^-1 (F - J^T lam);  J a = 0  ->  (J M^-1 J^T) lam = J M^-1 F
+        J = sp.Matrix([[geom[j]["dr"][c] for c in coords] for j in constrained])
         A = J * Minv * J.T
-        du = Minv * J.T * A.LUsolve(J * u_vec)
-        return {u[c]: sp.expand(u[c] - du[i]) for i, c in enumerate(coords)}
+        lam = A.LUsolve(J * Minv * Fvec)
+        lam = [_tidy(x) for x in lam]
+        for i, j in enumerate(constrained):
+            fj[j] = lam[i]
+        Fvec = Fvec - J.T * sp.Matrix(lam)
+    return Fvec, Fdisp, Nj, fj, constrained
 
-    def subs_f(expr, mode: Mode, j):
-        return sp.sympify(expr).xreplace({f_sym[j]: mode.friction_forces[j]})
 
-    def make_transitions(j, mode: Mode, candidates: list[Candidate]):
+def _flow(asm: _Assembly, combo) -> tuple[Mode, dict]:
+    """The mode ``combo`` (accelerations, state rates, contact forces; no guards) and its display forces."""
+    Fvec, Fdisp, Nj, fj, constrained = _contact_forces(asm, combo)
+    acc = [sp.expand(x) for x in asm.Minv * Fvec]
+    rates = []
+    for j, c in enumerate(asm.contacts):
+        lm = _law_mode(combo, j)
+        sub = {asm.f_sym[j]: fj[j]}
+        r = c.friction.rates(lm, asm.ctxs[j]) if lm else c.friction.open_rates(asm.ctxs[j])
+        for st in c.friction.states:
+            rates.append(sp.sympify(r.get(st, 0)).xreplace(sub))
+    name = _mode_name(asm.contacts, combo)
+    return Mode(name, combo, acc, rates, Nj, fj, constrained), Fdisp
+
+
+def _projection(asm: _Assembly, constrained) -> dict:
+    """Velocity reset onto ``v = 0`` of every stick constraint in ``constrained``."""
+    if not constrained:
+        return {}
+    coords, u = asm.coords, asm.u
+    u_vec = sp.Matrix([u[c] for c in coords])
+    Minv = asm.Minv
+    J = sp.Matrix([[asm.geom[j]["dr"][c] for c in coords] for j in constrained])
+    A = J * Minv * J.T
+    du = Minv * J.T * A.LUsolve(J * u_vec)
+    return {u[c]: sp.expand(u[c] - du[i]) for i, c in enumerate(coords)}
+
+
+def _contact_guards(c, lm, ctx: ContactContext, delta) -> list[Guard]:
+    """One contact's guards in its mode ``lm`` (``None``: open), named without the contact.
+
+    Open: the contact closes when ``delta`` rises through zero (the law's entry
+    candidates). Closed: it opens when ``delta`` falls through zero, then the
+    law's own guards, in the law's order.
+    """
+    if lm is None:
+        return [Guard(delta, +1, list(c.friction.entry(ctx)), "close")]
+    out = [Guard(delta, -1, [Candidate("open", sp.true, c.friction.exit_reset(ctx))], "open")]
+    for g in c.friction.guards(lm, ctx):
+        if g.direction not in (-1, 0, 1):
+            raise ValueError(f"guard {g.name!r}: direction must be -1, 0 or +1")
+        out.append(g)
+    return out
+
+
+#: ``resolve(combo) -> (target id, constrained contacts, friction force of contact j)``
+_Resolver = Callable[[tuple], tuple]
+
+
+def _guards(asm: _Assembly, mode: Mode, resolve: _Resolver) -> list[GuardSpec]:
+    """Guards of ``mode`` with their transitions; targets are identified by ``resolve``."""
+    contacts, ctxs = asm.contacts, asm.ctxs
+    projections: dict = {}
+
+    def subs_f(expr, force, j):
+        return sp.sympify(expr).xreplace({asm.f_sym[j]: force})
+
+    def transitions(j, candidates):
         c = contacts[j]
         out = []
         for cand in candidates:
@@ -169,37 +262,31 @@ def derive(model: Model) -> HybridSystem:
                                  f"which is not among its modes {c.modes}")
             combo = list(mode.local)
             combo[j] = cand.mode
-            target = modes[index[tuple(combo)]]
+            target, constrained, force_of = resolve(tuple(combo))
             reset = {}
             for st, expr in cand.reset.items():
-                reset[ctxs[j].states[st]] = subs_f(expr, mode, j)
-            reset.update(projection(target) if set(target.constrained) - set(mode.constrained)
-                         else {})
-            cond = subs_f(cand.when, target, j)
-            out.append(Transition(index[tuple(combo)], cond, reset))
+                reset[ctxs[j].states[st]] = subs_f(expr, mode.friction_forces[j], j)
+            if set(constrained) - set(mode.constrained):
+                key = tuple(constrained)
+                if key not in projections:
+                    projections[key] = _projection(asm, constrained)
+                reset.update(projections[key])
+            cond = subs_f(cand.when, force_of(j), j)
+            out.append(Transition(target, cond, reset))
         return out
 
-    # --- guards -------------------------------------------------------------------
-    for mode in modes:
-        for j, c in enumerate(contacts):
-            lm = law_mode(j, mode.local)
-            ctx = ctxs[j]
-            delta = geom[j]["delta"]
-            if lm is None:
-                mode.guards.append(GuardSpec(delta, +1, f"{c.name}: close", j,
-                                             make_transitions(j, mode, c.friction.entry(ctx))))
-                continue
-            exit_c = Candidate("open", sp.true, c.friction.exit_reset(ctx))
-            mode.guards.append(GuardSpec(delta, -1, f"{c.name}: open", j,
-                                         make_transitions(j, mode, [exit_c])))
-            for g in c.friction.guards(lm, ctx):
-                if g.direction not in (-1, 0, 1):
-                    raise ValueError(f"guard {g.name!r}: direction must be -1, 0 or +1")
-                mode.guards.append(GuardSpec(subs_f(g.expr, mode, j), g.direction,
-                                             f"{c.name}: {g.name}", j,
-                                             make_transitions(j, mode, list(g.candidates))))
+    guards = []
+    for j, c in enumerate(contacts):
+        lm = _law_mode(mode.local, j)
+        for g in _contact_guards(c, lm, ctxs[j], asm.geom[j]["delta"]):
+            guards.append(GuardSpec(subs_f(g.expr, mode.friction_forces[j], j), g.direction, f"{c.name}: {g.name}", j,
+                                    transitions(j, list(g.candidates))))
+    return guards
 
-    # --- energy -------------------------------------------------------------------
+
+def _energy(asm: _Assembly, modes: list[Mode]) -> dict:
+    """Energy terms of the system and, per mode, of the contacts and laws."""
+    model, q, u, t, coords, masses = asm.model, asm.q, asm.u, asm.t, asm.coords, asm.masses
     kinetic = sum(masses[c] * u[c] ** 2 / 2 for c in coords)
     potential = sum((sp.sympify(sp_.potential_energy(q)) for sp_ in model.springs), sp.Integer(0))
     input_power = sum((sum(f * u[c] for c, f in comp.loads(q, u, t).items()) for comp in model.forces),
@@ -209,22 +296,209 @@ def derive(model: Model) -> HybridSystem:
               "viscous_power": viscous, "contact": [], "law": [], "friction_power": []}
     for mode in modes:
         contact_e, law_e, fric_p = sp.Integer(0), sp.Integer(0), sp.Integer(0)
-        for j, c in enumerate(contacts):
-            E_law = c.friction.stored_energy(ctxs[j])
+        for j, c in enumerate(asm.contacts):
+            E_law = c.friction.stored_energy(asm.ctxs[j])
             law_e += E_law
-            if law_mode(j, mode.local) is None:
+            if _law_mode(mode.local, j) is None:
                 continue
             k = c.parameters()["k"].symbol
-            contact_e += k * geom[j]["delta"] ** 2 / 2
-            dE = sum(sp.diff(E_law, st) * mode.state_rates[state_syms.index(st)]
-                     for st in ctxs[j].states.values())
-            fric_p += mode.friction_forces[j] * ctxs[j].v - dE
+            contact_e += k * asm.geom[j]["delta"] ** 2 / 2
+            dE = sum(sp.diff(E_law, st) * mode.state_rates[asm.state_syms.index(st)]
+                     for st in asm.ctxs[j].states.values())
+            fric_p += mode.friction_forces[j] * asm.ctxs[j].v - dE
         energy["contact"].append(contact_e)
         energy["law"].append(law_e)
         energy["friction_power"].append(fric_p)
+    return energy
 
-    return HybridSystem(model=model, t=t, q=[q[c] for c in coords], u=[u[c] for c in coords],
-                        s=state_syms, params=params, mass_matrix=M, generalized_forces=display_F,
-                        normal_symbols=N_sym, friction_symbols=f_sym, modes=modes,
+
+# --- every mode --------------------------------------------------------------------------
+
+def derive(model: Model) -> HybridSystem:
+    """Derive every reachable mode of ``model`` with its flow, guards and transitions.
+
+    The modes are the product of every contact's modes, so the cost grows as
+    ``prod(len(c.modes))``; for many contacts derive one mode with
+    :func:`derive_mode`.
+
+    Parameters
+    ----------
+    model : Model
+
+    Returns
+    -------
+    HybridSystem
+    """
+    asm = _assemble(model)
+    contacts = asm.contacts
+    local_modes = [c.modes for c in contacts]
+    combos = list(itertools.product(*local_modes)) if contacts else [()]
+
+    display_F = {}
+    modes: list[Mode] = []
+    for combo in combos:
+        mode, Fdisp = _flow(asm, combo)
+        display_F[mode.name] = Fdisp
+        modes.append(mode)
+
+    index = {m.local: i for i, m in enumerate(modes)}
+
+    def resolve(combo):
+        target = modes[index[combo]]
+        return index[combo], target.constrained, lambda j: target.friction_forces[j]
+
+    for mode in modes:
+        mode.guards.extend(_guards(asm, mode, resolve))
+
+    return HybridSystem(model=model, t=asm.t, q=[asm.q[c] for c in asm.coords],
+                        u=[asm.u[c] for c in asm.coords], s=asm.state_syms, params=asm.params,
+                        mass_matrix=asm.M, generalized_forces=display_F, normal_symbols=asm.N_sym,
+                        friction_symbols=asm.f_sym, modes=modes,
                         open_mode=index[tuple("open" for _ in contacts)] if contacts else 0,
-                        energy=energy)
+                        energy=_energy(asm, modes))
+
+
+# --- one mode ----------------------------------------------------------------------------
+
+def mode_count(model: Model) -> int:
+    """Number of modes :func:`derive` would derive, ``prod(len(c.modes))``, without enumerating them."""
+    return math.prod(len(c.modes) for c in model.contacts)
+
+
+def _combo(contacts, assignment: Mapping[str, str]) -> tuple:
+    """The local modes of ``assignment`` (contact name -> mode; unnamed contacts open).
+
+    Raises
+    ------
+    KeyError
+        For an unknown contact or a mode the contact does not have; the message
+        names the valid ones.
+    """
+    by_name = {c.name: c for c in contacts}
+    for name, mode in assignment.items():
+        if name not in by_name:
+            valid = ", ".join(by_name) if by_name else "none (the model has no contact)"
+            raise KeyError(f"no contact {name!r}; contacts are {valid}")
+        if mode not in by_name[name].modes:
+            raise KeyError(f"contact {name} has no mode {mode!r}; its modes are "
+                           f"{', '.join(by_name[name].modes)}")
+    return tuple(assignment.get(c.name, "open") for c in contacts)
+
+
+def derive_mode(model: Model, assignment: Mapping[str, str] | None = None) -> ModeSystem:
+    """Derive one mode of ``model``: its flow, contact forces and guards, nothing else.
+
+    Nothing is enumerated: the cost grows with the model (coordinates, contacts
+    and the transitions out of this mode), not with the number of mode
+    combinations, so one mode of a 24-blade ring derives in about a second. The
+    expressions are those of the same mode in :func:`derive` (same code).
+
+    Parameters
+    ----------
+    model : Model
+    assignment : dict of str to str, optional
+        Contact name -> mode (``{"c12": "stick"}``); contacts not named are
+        ``open``. ``None`` or ``{}``: every contact open.
+
+    Returns
+    -------
+    ModeSystem
+        The mode (``.mode``: accelerations with the stick forces of every
+        sticking contact solved jointly, ``N``, ``f``, state rates, and guards of
+        every contact), its generalized forces with ``N_c``, ``f_c`` kept as
+        symbols for display, and the targets of the guards' transitions
+        (``Transition.target`` indexes ``.targets``).
+
+    Raises
+    ------
+    KeyError
+        For an unknown contact or mode; the message names the valid ones.
+    """
+    asm = _assemble(model)
+    combo = _combo(asm.contacts, dict(assignment or {}))
+    mode, Fdisp = _flow(asm, combo)
+
+    targets: list[tuple] = []
+    ids: dict = {}
+    solved: dict = {combo: mode.friction_forces}
+
+    def resolve(target):
+        if target not in ids:
+            ids[target] = len(targets)
+            targets.append(target)
+        changed = [j for j, (a, b) in enumerate(zip(target, combo)) if a != b]
+        constrained = sorted((set(mode.constrained) - set(changed))
+                             | {j for j in changed if _local_force(asm, target, j) is STICK})
+
+        def force_of(j):
+            force = _local_force(asm, target, j)
+            if force is not STICK:
+                return force
+            if target not in solved:  # the stick force needs the joint solve of the target
+                solved[target] = _contact_forces(asm, target)[3]
+            return solved[target][j]
+
+        return ids[target], constrained, force_of
+
+    mode.guards.extend(_guards(asm, mode, resolve))
+    return ModeSystem(model=model, t=asm.t, q=[asm.q[c] for c in asm.coords],
+                      u=[asm.u[c] for c in asm.coords], s=asm.state_syms, params=asm.params,
+                      mass_matrix=asm.M, normal_symbols=asm.N_sym, friction_symbols=asm.f_sym,
+                      mode=mode, forces=Fdisp, targets=targets,
+                      contact_names=[c.name for c in asm.contacts])
+
+
+# --- one contact -------------------------------------------------------------------------
+
+def contact_equations(model: Model, name: str) -> ContactEquations:
+    """One contact's own equations, in every one of its modes, independent of the others.
+
+    The friction law is written with the contact's ``N_c``, ``v_c`` (and ``Ndot_c``)
+    as symbols, defined once from the penetration and the relative slip; ``f_c``
+    in a stick mode stays a symbol: it is the constraint force holding
+    ``dv_c/dt = 0``, which depends on the other contacts (see :func:`derive_mode`).
+
+    Parameters
+    ----------
+    model : Model
+    name : str
+        A contact name.
+
+    Returns
+    -------
+    ContactEquations
+
+    Raises
+    ------
+    KeyError
+        For an unknown contact; the message names the valid ones.
+    """
+    by_name = {c.name: c for c in model.contacts}
+    if name not in by_name:
+        valid = ", ".join(by_name) if by_name else "none (the model has no contact)"
+        raise KeyError(f"no contact {name!r}; contacts are {valid}")
+    c = by_name[name]
+    q, u, s = _state_symbols(model)
+    delta = c.penetration(q)
+    slip = c.relative_slip(q)
+    k = c.parameters()["k"].symbol
+    N, Ndot, v, f = (sp.Symbol(f"{x}_{name}", real=True) for x in ("N", "Ndot", "v", "f"))
+    states = {st: s[(name, st)] for st in c.friction.states}
+    ctx = ContactContext(N=N, Ndot=Ndot, v=v, f=f, states=states,
+                         params={n: p.symbol for n, p in c.friction.parameters().items()})
+    modes = []
+    for mode in c.modes:
+        lm = None if mode == "open" else mode
+        r = c.friction.rates(lm, ctx) if lm else c.friction.open_rates(ctx)
+        modes.append(ContactModeEquations(
+            mode=mode, normal_force=sp.Integer(0) if lm is None else N,
+            friction_force=sp.Integer(0) if lm is None else c.friction.force(lm, ctx),
+            rates={states[st]: sp.sympify(r.get(st, 0)) for st in c.friction.states},
+            guards=_contact_guards(c, lm, ctx, delta)))
+    return ContactEquations(
+        model=model, name=name, bodies=tuple(b.name for b in c.bodies), ground=c.body2 is None,
+        law=type(c.friction).__name__, q=list(q.values()), u=list(u.values()),
+        penetration=delta, slip=slip, N=N, Ndot=Ndot, v=v, f=f,
+        definitions={N: k * delta, v: _derivative(slip, q, u), Ndot: k * _derivative(delta, q, u)},
+        states=states, params=[p.symbol for p in (*c.parameters().values(), *c.friction.parameters().values())],
+        modes=modes)
