@@ -190,6 +190,7 @@ class Assignment:
     N: np.ndarray
     f: np.ndarray
     arel: np.ndarray       # relative tangential accelerations
+    stick_ok: bool = True  # every undetermined sticking contact has both stick guards >= 0
 
 
 @dataclass
@@ -223,33 +224,78 @@ class CoulombReference:
         self.max_step = chain.period / 100 if max_step is None else max_step
         self.v_tol, self.cone_tol, self.tie_tol = v_tol, cone_tol, tie_tol
         self._W = chain.W
+        self._cache: dict = {}
 
     # ---- forces and flow --------------------------------------------------------------
-    def forces(self, t: float, y: np.ndarray, modes) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """``(N, f, acc, arel)``: normal and friction forces, accelerations, relative tangential ones."""
+    def _linear(self, q, u, one, L, modes):
+        """``N``, ``f``, ``acc`` for columns of ``q``, ``u``, ``L`` (``(n, p)``) and constants ``one`` (``(p,)``).
+
+        Everything is linear in ``(q, u, 1, F)`` for fixed modes; called with the
+        identity as columns it gives the affine maps of :meth:`_affine`.
+        """
         c = self.c
-        n = c.n
-        q, u = y[:n], y[n:2 * n]
         modes = np.asarray(modes)
-        closed = modes != OPEN
-        N = np.where(closed, c.k * (c.Gn @ q - c.gap), 0.0)
-        f = np.zeros(c.nc)
-        for j in range(c.nc):
-            if modes[j] in (SLIP_P, SLIP_M):
-                f[j] = slip_sign(modes[j]) * c.mu[j] * N[j]
-        F = c.load(t) - c.K @ q - c.C @ u - c.Gn.T @ N - c.Gr.T @ f
+        closed = (modes != OPEN).astype(float)[:, None]
+        N = closed * c.k[:, None] * (c.Gn @ q - c.gap[:, None] * one[None, :])
+        sgn = np.array([slip_sign(mj) if mj in (SLIP_P, SLIP_M) else 0.0 for mj in modes])
+        f = (sgn * c.mu)[:, None] * N
+        F = L - c.K @ q - c.C @ u - c.Gn.T @ N - c.Gr.T @ f
         S = np.flatnonzero(modes == STICK)
         if S.size:
             GS = c.Gr[S]
-            fS = np.linalg.solve((GS / c.m) @ GS.T, GS @ (F / c.m))
+            fS = np.linalg.solve((GS / c.m) @ GS.T, GS @ (F / c.m[:, None]))
             f[S] = fS
             F = F - GS.T @ fS
-        acc = F / c.m
-        return N, f, acc, c.Gr @ acc
+        return N, f, F / c.m[:, None]
+
+    def _affine(self, modes):
+        """Per modes: matrices ``R_N, R_f, R_acc`` with ``N = R_N X`` etc., ``X = (q, u, 1, F(t))``."""
+        key = tuple(int(x) for x in modes)
+        out = self._cache.get(key)
+        if out is None:
+            n = self.c.n
+            E = np.eye(3 * n + 1)
+            N, f, acc = self._linear(E[:n], E[n:2 * n], E[2 * n], E[2 * n + 1:], key)
+            out = self._cache[key] = (N, f, acc, self.c.Gr @ acc)
+        return out
+
+    def _X(self, t, y):
+        n = self.c.n
+        return np.concatenate([y[:2 * n], (1.0,), self.c.load(t)])
+
+    def forces(self, t: float, y: np.ndarray, modes) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(N, f, acc, arel)``: normal and friction forces, accelerations, relative tangential ones."""
+        X = self._X(t, y)
+        return tuple(R @ X for R in self._affine(modes))
 
     def rhs(self, t, y, modes):
         n = self.c.n
-        return np.concatenate([y[n:2 * n], self.forces(t, y, modes)[2]])
+        return np.concatenate([y[n:2 * n], self._affine(modes)[2] @ self._X(t, y)])
+
+    def _flow(self, modes):
+        """``rhs`` as a fast closure: ``y' = A y + b0 + bs sin(w t) + bc cos(w t)`` (same matrices)."""
+        c = self.c
+        n = c.n
+        R = self._affine(modes)[2]
+        A = np.zeros((2 * n, 2 * n))
+        A[:n, n:] = np.eye(n)
+        A[n:] = R[:, :2 * n]
+        b0 = np.concatenate([np.zeros(n), R[:, 2 * n]])
+        bs = np.concatenate([np.zeros(n), R[:, 2 * n + 1:] @ c.fs])
+        bc = np.concatenate([np.zeros(n), R[:, 2 * n + 1:] @ c.fc])
+        w = c.omega
+        sin, cos = math.sin, math.cos
+
+        def f(t, y):
+            return A @ y + b0 + bs * sin(w * t) + bc * cos(w * t)
+        return f
+
+    def _event_rows(self, modes):
+        """Guard ``i`` as ``g_y[i] . y + g0[i] + gs[i] sin(w t) + gc[i] cos(w t)``."""
+        c = self.c
+        n = c.n
+        Rg = self._guard_matrix(modes)
+        return Rg[:, :2 * n], Rg[:, 2 * n], Rg[:, 2 * n + 1:] @ c.fs, Rg[:, 2 * n + 1:] @ c.fc
 
     def project(self, y: np.ndarray, stick: np.ndarray) -> np.ndarray:
         """Velocities projected onto ``v_j = 0`` for the contacts ``stick`` (boolean mask)."""
@@ -282,23 +328,31 @@ class CoulombReference:
                 out.append((j, "v=0", -1))
         return out
 
+    def _guard_matrix(self, modes) -> np.ndarray:
+        """Rows ``R_g`` with guard values ``R_g X`` (``X`` of :meth:`_affine`), in :meth:`guard_list` order."""
+        key = ("g",) + tuple(int(x) for x in modes)
+        out = self._cache.get(key)
+        if out is None:
+            c = self.c
+            n = c.n
+            R_N, R_f, _, _ = self._affine(modes)
+            delta = np.concatenate([c.Gn, np.zeros((c.nc, n)), -c.gap[:, None], np.zeros((c.nc, n))], axis=1)
+            vel = np.concatenate([np.zeros((c.nc, n)), c.Gr, np.zeros((c.nc, 1 + n))], axis=1)
+            rows = []
+            for j, kind, _ in self.guard_list(modes):
+                if kind in ("close", "open"):
+                    rows.append(delta[j])
+                elif kind == "stick->slip+":
+                    rows.append(c.mu[j] * R_N[j] - R_f[j])
+                elif kind == "stick->slip-":
+                    rows.append(c.mu[j] * R_N[j] + R_f[j])
+                else:
+                    rows.append(slip_sign(modes[j]) * vel[j])
+            out = self._cache[key] = np.array(rows)
+        return out
+
     def guard_values(self, t, y, modes) -> np.ndarray:
-        c = self.c
-        n = c.n
-        N, f, _, _ = self.forces(t, y, modes)
-        delta = c.Gn @ y[:n] - c.gap
-        v = c.Gr @ y[n:2 * n]
-        vals = []
-        for j, kind, _ in self.guard_list(modes):
-            if kind in ("close", "open"):
-                vals.append(delta[j])
-            elif kind == "stick->slip+":
-                vals.append(c.mu[j] * N[j] - f[j])
-            elif kind == "stick->slip-":
-                vals.append(c.mu[j] * N[j] + f[j])
-            else:
-                vals.append(slip_sign(modes[j]) * v[j])
-        return np.array(vals)
+        return self._guard_matrix(modes) @ self._X(t, y)
 
     @staticmethod
     def _crossed(g0, g1, direction) -> bool:
@@ -324,6 +378,9 @@ class CoulombReference:
             stick = cm == STICK
             ya = self.project(y, stick) if np.any(stick & ~was_stick) else y.copy()
             N, f, _, arel = self.forces(t, ya, cm)
+            g = self.guard_values(t, ya, cm)
+            stick_ok = all(g[i] >= 0.0 for i, (j, kind, _) in enumerate(self.guard_list(cm))
+                           if kind.startswith("stick") and j in U)
             viol = 0.0
             for j in U:
                 bound = c.mu[j] * N[j]
@@ -332,17 +389,27 @@ class CoulombReference:
                 else:
                     v = -slip_sign(cm[j]) * arel[j] / max(self._W[j, j] * bound, 1e-300)
                 viol = max(viol, v)
-            out.append(Assignment(cm, ya, viol, N, f, arel))
+            out.append(Assignment(cm, ya, viol, N, f, arel, stick_ok))
         return out
 
-    def consistent(self, assignments: list[Assignment], undetermined) -> Assignment:
-        """The consistent assignment (unique up to round-off ties), or :class:`FrictionProblemError`."""
-        ok = [a for a in assignments if a.violation <= self.cone_tol]
+    def consistent(self, assignments: list[Assignment], undetermined, proposed=None) -> Assignment:
+        """The consistent assignment (unique up to round-off ties), or :class:`FrictionProblemError`.
+
+        Consistent: every sticking contact inside its cone, evaluated exactly as
+        the stick guards are (no tolerance, so a stick guard never starts below
+        zero, where ``solve_ivp`` could not see it fall), and every slipping
+        contact's acceleration along its slip within ``cone_tol``. Among tied
+        assignments (the same forces to ``tie_tol``), the ``proposed`` modes (what
+        the fired guard asks for: slip after a stick guard, stick after ``v = 0``)
+        are preferred, then the least violation.
+        """
+        ok = [a for a in assignments if a.stick_ok and a.violation <= self.cone_tol]
         if not ok:
             raise FrictionProblemError("no consistent stick/slip assignment: "
                                        + "; ".join(f"{a.modes.tolist()}: {a.violation:.3g}" for a in assignments))
-        best = min(ok, key=lambda a: a.violation)
         U = list(undetermined)
+        prop = None if proposed is None else np.asarray(proposed)[U]
+        best = min(ok, key=lambda a: (prop is None or not np.array_equal(a.modes[U], prop), a.violation))
         scale = max(float(np.max(self.c.mu[U] * best.N[U])), 1e-300)
         for a in ok:
             if np.max(np.abs(a.f[U] - best.f[U])) > self.tie_tol * scale:
@@ -351,10 +418,10 @@ class CoulombReference:
         return best
 
     def settle(self, t, y, modes, undetermined, was_stick) -> tuple[np.ndarray, np.ndarray]:
-        """Modes and (projected) state after the friction problem of ``undetermined``."""
+        """Modes and (projected) state after the friction problem of ``undetermined`` (``modes``: proposed)."""
         if not len(undetermined):
             return np.array(modes, dtype=np.int64), y
-        best = self.consistent(self.enumerate(t, y, modes, undetermined, was_stick), undetermined)
+        best = self.consistent(self.enumerate(t, y, modes, undetermined, was_stick), undetermined, modes)
         return best.modes, best.y
 
     def undetermined(self, y, modes, extra=()) -> list[int]:
@@ -408,14 +475,19 @@ class CoulombReference:
             glist = self.guard_list(modes)
             cm = modes.copy()
 
+            gy, g0, gs, gc = self._event_rows(cm)
+            w = c.omega
+
             def make(i, d):
+                gyi, g0i, gsi, gci = gy[i], float(g0[i]), float(gs[i]), float(gc[i])
+
                 def ev(tt, yy):
-                    return self.guard_values(tt, yy, cm)[i]
+                    return float(gyi @ yy) + g0i + gsi * math.sin(w * tt) + gci * math.cos(w * tt)
                 ev.terminal = True
                 ev.direction = d
                 return ev
             events = [make(i, d) for i, (_, _, d) in enumerate(glist)]
-            sol = solve_ivp(lambda tt, yy: self.rhs(tt, yy, cm), (t, t_stop), y, method="DOP853", rtol=self.rtol,
+            sol = solve_ivp(self._flow(cm), (t, t_stop), y, method="DOP853", rtol=self.rtol,
                             atol=self.atol, events=events, dense_output=True, max_step=self.max_step)
             if sol.status < 0:
                 raise RuntimeError(f"solve_ivp failed at t = {t}: {sol.message}")
@@ -465,7 +537,11 @@ class CoulombReference:
                     else:
                         new[j] = STICK
                         extra.add(j)
-                else:   # v = 0 of a slip, or a stick guard: the friction problem decides
+                elif kind == "v=0":   # proposed: stick; the friction problem decides
+                    new[j] = STICK
+                    extra.add(j)
+                else:                 # a stick guard; proposed: that slip
+                    new[j] = SLIP_P if kind == "stick->slip+" else SLIP_M
                     extra.add(j)
             for j in list(extra):
                 if new[j] == OPEN:

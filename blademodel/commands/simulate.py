@@ -27,6 +27,10 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="RK4 steps per excitation period (default 1000)")
     p.add_argument("--event-tol", type=float, default=1e-10, metavar="E",
                    help="event bracket, as a fraction of the step (default 1e-10)")
+    p.add_argument("--record-every", type=int, default=1, metavar="K",
+                   help="record the state every K steps (default 1; Poincare samples are always kept)")
+    p.add_argument("--kernel", choices=("auto", "product", "contact"), default="auto",
+                   help="auto (default): product modes for at most one contact, per-contact modes otherwise")
     p.add_argument("--out", metavar="FILE", help="save the full result (.npz)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=run)
@@ -77,16 +81,23 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = simulate(model, periods=args.periods, transient=args.transient,
                           steps_per_period=args.steps_per_period, event_tol=args.event_tol,
-                          length_scale=model.length_scale, progress=_progress, record_every=1)
+                          length_scale=model.length_scale, progress=_progress, record_every=args.record_every,
+                          kernel=args.kernel)
     except SimulationError as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
     rep = report(config, model, result)
     rep["Pd"] = _vibration_reduction(model, result, args)
     if args.out:
+        extra = {}
+        if result.contacts is not None:   # per-contact kernel: each contact's mode and forces per record
+            extra = {"contact_names": np.array(result.contacts["names"]), "contact_modes": result.contacts["modes"],
+                     "contact_mode_names": np.array([",".join(m) for m in result.contacts["mode_names"]])}
+            if "N" in result.contacts:
+                extra.update(contact_N=result.contacts["N"], contact_f=result.contacts["f"])
         np.savez_compressed(args.out, t=result.t, y=result.y, mode=result.mode, poincare=result.poincare,
                             poincare_t=result.poincare_t, state_names=np.array(result.state_names),
-                            mode_names=np.array(result.mode_names), report=json.dumps(rep))
+                            mode_names=np.array(result.mode_names), report=json.dumps(rep), **extra)
     if args.json:
         print(json.dumps(rep))
     else:

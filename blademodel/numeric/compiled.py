@@ -35,8 +35,13 @@ def cache_dir() -> Path:
 
 def _law_sources(model: Model) -> str:
     """Hash of the source of every friction law class the model uses (external ones too)."""
+    return law_source_hash(c.friction for c in model.contacts)
+
+
+def law_source_hash(laws) -> str:
+    """Hash of the source of the classes of ``laws`` outside the package (its own are in the code version)."""
     h = hashlib.sha256()
-    for cls in sorted({type(c.friction) for c in model.contacts}, key=lambda c: f"{c.__module__}.{c.__qualname__}"):
+    for cls in sorted({type(law) for law in laws}, key=lambda c: f"{c.__module__}.{c.__qualname__}"):
         for klass in cls.__mro__:
             if klass.__module__.startswith("blademodel.components.friction") or klass is object:
                 continue  # the package's own laws are in _code_version

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Model
-from .compiled import _law_sources, _load, cache_dir
+from .compiled import _load, cache_dir, law_source_hash
 from .contact_tables import NumericTables, cached_tables
 from . import contract
 from .contract import N_COUNTERS, N_STATS
@@ -50,6 +50,11 @@ def _versions() -> str:
     return f"{platform.python_version()}|{np.__version__}|{numba.__version__}"
 
 
+def _module_name(source: str) -> str:
+    """File name of a generated module: the hash of its text and of the library versions."""
+    return f"ck_{hashlib.sha256((source + _versions()).encode()).hexdigest()[:20]}.py"
+
+
 def law_kinds(model: Model) -> tuple[list, list[int]]:
     """One law instance per distinct :meth:`structure` (sorted), and each contact's kind."""
     by_key: dict = {}
@@ -64,26 +69,21 @@ def compile_contact_kernel(model: Model):
     """The compiled per-contact module for the law kinds of ``model`` and its metadata."""
     laws, _ = law_kinds(model)
     kinds_key = json.dumps([[str(x) for x in law.structure()] for law in laws])
-    fake = Model(model.masses, contacts=model.contacts)  # only the laws matter to _law_sources
-    key = hashlib.sha256(f"{kinds_key}|{_law_sources(fake)}|{_code_version()}".encode()).hexdigest()[:16]
+    key = hashlib.sha256(f"{kinds_key}|{law_source_hash(laws)}|{_code_version()}".encode()).hexdigest()[:16]
     if key in _MEMO:
         return _MEMO[key]
     folder = cache_dir()
     index = folder / f"ck_{key}.json"
-    if index.exists():
-        info = json.loads(index.read_text())
+    info = json.loads(index.read_text()) if index.exists() else None
+    if info is not None:
         path = folder / info["file"]
-        if not path.exists() or hashlib.sha256((path.read_text() + _versions()).encode()).hexdigest()[:20] \
-                != info["file"][3:-3]:
-            info = None
-    else:
-        info = None
+        if not path.exists() or _module_name(path.read_text()) != path.name:
+            info = None   # a module edited, damaged or built for other library versions
     if info is None:
         from .contact_codegen import generate_contact_kernel
         source, meta = generate_contact_kernel(laws)
-        digest = hashlib.sha256((source + _versions()).encode()).hexdigest()[:20]
-        path = folder / f"ck_{digest}.py"
-        if not path.exists():
+        path = folder / _module_name(source)
+        if not path.exists() or path.read_text() != source:
             tmp = path.with_suffix(f".tmp{os.getpid()}")
             tmp.write_text(source)
             os.replace(tmp, path)

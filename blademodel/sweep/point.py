@@ -8,7 +8,7 @@ import numpy as np
 
 from ..analysis import classify_motion, largest_lyapunov, mean_square, poincare_period, vibration_reduction
 from ..config import apply_overrides, config_from_data
-from ..numeric.contract import C_EVENTS, N_COUNTERS, STATUS_NAMES
+from ..numeric.contract import C_EVENTS, N_COUNTERS, N_STATS, S_MAX_CONE_RATIO, STATUS_NAMES
 from ..numeric.kernels import make_integrator
 from ..numeric.mean_square import mean_square_run, without_contacts
 
@@ -83,10 +83,13 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
         rec = integ.record_buffer(n_rec)
         poinc = np.empty((periods, integ.n_state))
         counters = np.zeros(N_COUNTERS, dtype=np.int64)
-        status, mode, t = integ.advance(y, mode, 0, transient, counters=counters)
+        per_contact = getattr(integ, "kernel", "product") == "contact"
+        stats = np.zeros(N_STATS)
+        extra = {"stats": stats} if per_contact else {}
+        status, mode, t = integ.advance(y, mode, 0, transient, counters=counters, **extra)
         if not status:
             status, mode, t = integ.advance(y, mode, transient, transient + periods, poincare=poinc,
-                                            counters=counters,
+                                            counters=counters, **extra,
                                             n_transient=transient, record=rec if keep else None)
         if status:
             raise RuntimeError(f"integration failed at t = {t:.6g} s ({STATUS_NAMES.get(status, status)})")
@@ -96,7 +99,8 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
         scale_len = model.length_scale or float("nan")
         out = {"poincare_x1": poinc[:, ix].copy(), "poincare_vx1": poinc[:, iv].copy(),
                "length_scale": scale_len, "period": poincare_period(poinc[:, :n_phys]),
-               "events": int(counters[C_EVENTS]), "final_state": y.copy()}
+               "events": int(counters[C_EVENTS]), "final_state": y.copy(),
+               "max_cone_ratio": float(stats[S_MAX_CONE_RATIO]) if per_contact else float("nan")}
         lam = float("nan")
         if run.get("lyapunov_periods", 0):
             ref = abs(scale_len) if np.isfinite(scale_len) and scale_len else max(np.max(np.abs(poinc[:, 0])), 1e-12)

@@ -20,7 +20,8 @@ import numpy as np
 
 from .. import __version__
 
-SCALARS = ("length_scale", "period", "motion", "lyapunov", "P", "P0", "Pd", "events")
+#: ``max_cone_ratio``: the largest |f| / (mu N) of a sticking Coulomb contact (per-contact kernel; NaN otherwise).
+SCALARS = ("length_scale", "period", "motion", "lyapunov", "P", "P0", "Pd", "events", "max_cone_ratio")
 INTS = ("period", "motion", "events")
 LAW_CHARS, ERROR_CHARS = 32, 400
 FORMAT = "NETCDF3_64BIT_OFFSET"
@@ -99,7 +100,7 @@ def write_point(path: Path, index: int, out: dict) -> None:
             ds["error"][index, :] = _chars(out["error"] or "failed", ERROR_CHARS)
         else:
             for name in SCALARS:
-                if name in out:
+                if name in out and name in ds.variables:   # files written before a variable existed resume
                     ds[name][index] = out[name]
             for name in ("poincare_x1", "poincare_vx1", "final_state", "history_t", "history_x1", "history_vx1"):
                 if name in out and name in ds.variables:

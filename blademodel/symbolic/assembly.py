@@ -119,9 +119,12 @@ def _assemble(model: Model) -> _Assembly:
             states={st: s[(c.name, st)] for st in c.friction.states},
             params={name: p.symbol for name, p in c.friction.parameters().items()})
         ctxs.append(ctx)
-        geom.append({"delta": delta,
-                     "dn": {cc: sp.diff(delta, q[cc]) for cc in coords},
-                     "dr": {cc: sp.diff(slip, q[cc]) for cc in coords}})
+        dn = {cc: sp.diff(delta, q[cc]) for cc in coords}
+        dr = {cc: sp.diff(slip, q[cc]) for cc in coords}
+        geom.append({"delta": delta, "dn": dn, "dr": dr,
+                     # the coordinates the contact acts on (its loads are zero on the others)
+                     "touched": [cc for cc in coords if dn[cc] != 0 or dr[cc] != 0],
+                     "slides": [cc for cc in coords if dr[cc] != 0]})
 
     state_syms = [s[(c.name, st)] for c in contacts for st in c.friction.states]
     return _Assembly(model, t, q, u, s, coords, params, masses, M, F_smooth, contacts, ctxs, geom,
@@ -147,20 +150,21 @@ def _local_force(asm: _Assembly, combo, j):
     return sp.Integer(0) if lm is None else asm.contacts[j].friction.force(lm, asm.ctxs[j])
 
 
-def _contact_forces(asm: _Assembly, combo):
-    """Loads of ``combo`` with the stick forces solved jointly.
+def _loads(asm: _Assembly, combo):
+    """Generalized forces of ``combo`` before the stick forces are known.
 
     Returns
     -------
-    Fvec : sympy.Matrix
-        Generalized forces, the solved stick constraint forces included.
+    F : dict
+        Coordinate -> load, the contacts' ``N`` and non-stick ``f`` included.
     Fdisp : dict
-        The same with ``N_c`` and ``f_c`` kept as symbols (display).
+        The same with ``N_c`` and ``f_c`` of every closed contact kept as symbols (display).
     Nj, fj : list
-        Normal and friction force of every contact.
+        Normal and friction force of every contact (``None`` for a stick force).
     constrained : list of int
+        Contacts whose friction force is a stick constraint force.
     """
-    coords, geom = asm.coords, asm.geom
+    geom = asm.geom
     F = dict(asm.F_smooth)
     Fdisp = dict(asm.F_smooth)
     Nj, fj, constrained = [], [], []
@@ -177,28 +181,55 @@ def _contact_forces(asm: _Assembly, combo):
             fj.append(None)
         else:
             fj.append(force)
-        for cc in coords:
+        for cc in geom[j]["touched"]:
             F[cc] += -asm.ctxs[j].N * geom[j]["dn"][cc]
             Fdisp[cc] += -asm.N_sym[j] * geom[j]["dn"][cc] - asm.f_sym[j] * geom[j]["dr"][cc]
             if force is not STICK:
                 F[cc] += -force * geom[j]["dr"][cc]
-    Fvec = sp.Matrix([F[c] for c in coords])
+    return F, Fdisp, Nj, fj, constrained
+
+
+def _joint_solve(asm: _Assembly, constrained: list, Fvec: sp.Matrix) -> list:
+    """Stick forces of ``constrained``, solved together: one linear solve over all of them."""
+    # a = M^-1 (F - J^T lam);  J a = 0  ->  (J M^-1 J^T) lam = J M^-1 F
     Minv = asm.Minv
+    J = sp.Matrix([[asm.geom[j]["dr"][c] for c in asm.coords] for j in constrained])
+    A = J * Minv * J.T
+    lam = A.LUsolve(J * Minv * Fvec)
+    return [_tidy(x) for x in lam]
+
+
+def _contact_forces(asm: _Assembly, combo, solve=_joint_solve):
+    """Loads of ``combo`` with the stick forces solved jointly.
+
+    ``solve(asm, constrained, Fvec)`` gives the stick forces (:func:`_joint_solve`
+    for :func:`derive`; :class:`_ComponentSolver` for :func:`derive_mode`).
+
+    Returns
+    -------
+    Fvec : sympy.Matrix
+        Generalized forces, the solved stick constraint forces included.
+    Fdisp : dict
+        The same with ``N_c`` and ``f_c`` kept as symbols (display).
+    Nj, fj : list
+        Normal and friction force of every contact.
+    constrained : list of int
+    """
+    coords, geom = asm.coords, asm.geom
+    F, Fdisp, Nj, fj, constrained = _loads(asm, combo)
+    Fvec = sp.Matrix([F[c] for c in coords])
     if constrained:
-        # a = M^-1 (F - J^T lam);  J a = 0  ->  (J M^-1 J^T) lam = J M^-1 F
-        J = sp.Matrix([[geom[j]["dr"][c] for c in coords] for j in constrained])
-        A = J * Minv * J.T
-        lam = A.LUsolve(J * Minv * Fvec)
-        lam = [_tidy(x) for x in lam]
+        lam = solve(asm, constrained, Fvec)
         for i, j in enumerate(constrained):
             fj[j] = lam[i]
+        J = sp.Matrix([[geom[j]["dr"][c] for c in coords] for j in constrained])
         Fvec = Fvec - J.T * sp.Matrix(lam)
     return Fvec, Fdisp, Nj, fj, constrained
 
 
-def _flow(asm: _Assembly, combo) -> tuple[Mode, dict]:
+def _flow(asm: _Assembly, combo, solve=_joint_solve) -> tuple[Mode, dict]:
     """The mode ``combo`` (accelerations, state rates, contact forces; no guards) and its display forces."""
-    Fvec, Fdisp, Nj, fj, constrained = _contact_forces(asm, combo)
+    Fvec, Fdisp, Nj, fj, constrained = _contact_forces(asm, combo, solve)
     acc = [sp.expand(x) for x in asm.Minv * Fvec]
     rates = []
     for j, c in enumerate(asm.contacts):

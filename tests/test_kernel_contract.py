@@ -1,0 +1,70 @@
+"""The kernel contract: named counters and statuses, the run buffer, a cache that cannot go stale."""
+
+import numpy as np
+import pytest
+
+from blademodel.config import BladedDisk
+from blademodel.numeric import ContactIntegrator, contract, simulate
+from blademodel.numeric import contact_kernel
+from blademodel.numeric.contact_tables import cached_tables, derive_tables
+
+
+def test_counter_and_status_names_cover_their_indices():
+    idx = sorted(getattr(contract, n) for n in dir(contract) if n.startswith("C_"))
+    assert idx == list(range(contract.N_COUNTERS)) == list(range(len(contract.COUNTER_NAMES)))
+    assert sorted(getattr(contract, n) for n in dir(contract) if n.startswith("S_")) == list(range(contract.N_STATS))
+    codes = sorted(getattr(contract, n) for n in dir(contract) if n.startswith("STATUS_") and n != "STATUS_NAMES")
+    assert codes == sorted(contract.STATUS_NAMES)
+
+
+def test_run_buffer_offsets_are_distinct_and_inside_their_arrays():
+    integ = ContactIntegrator(BladedDisk(blades=5, friction="bilinear").build(), check_stability=False)
+    I = integ.I
+    n, nc = I[contract.H_N], I[contract.H_NC]
+    assert (n, nc) == (10, 5)
+    for prefix, arr in (("O_", I), ("R_", integ.R), ("F_", integ.WF)):
+        offs = sorted(I[getattr(contract, k)] for k in dir(contract) if k.startswith(prefix))
+        assert len(set(offs)) == len(offs) and offs[-1] < arr.size
+    # the tables read back through the header equal the numeric tables
+    o = I[contract.R_INVM]
+    assert np.array_equal(integ.R[o:o + n], integ.tables.invm)
+    o = I[contract.R_W]
+    assert np.array_equal(integ.R[o:o + nc * nc].reshape(nc, nc), integ.tables.W)
+
+
+def test_an_edited_generated_module_is_never_run(tmp_path, monkeypatch):
+    monkeypatch.setenv("BLADEMODEL_CACHE_DIR", str(tmp_path))
+    model = BladedDisk(blades=3, friction="none").build()
+    contact_kernel._MEMO.clear()
+    module, _ = contact_kernel.compile_contact_kernel(model)
+    path = module.__file__
+    text = open(path).read()
+    assert path.endswith(contact_kernel._module_name(text))      # the file is named by its own hash
+    with open(path, "a") as fh:
+        fh.write("\n# an edit\n")
+    contact_kernel._MEMO.clear()
+    module2, _ = contact_kernel.compile_contact_kernel(model)
+    assert module2.__file__ == path                                 # regenerated under the same name ...
+    assert open(path).read() == text                                # ... from the source, not the edit
+
+
+def test_tables_follow_the_component_sources(tmp_path, monkeypatch):
+    monkeypatch.setenv("BLADEMODEL_CACHE_DIR", str(tmp_path))
+    model = BladedDisk(blades=3).build()
+    assert cached_tables(model) == derive_tables(model)
+    monkeypatch.setattr("blademodel.numeric.contact_tables._components_version", lambda: "edited")
+    names = {p.name for p in tmp_path.iterdir()}
+    cached_tables(model)
+    assert len({p.name for p in tmp_path.iterdir()} - names) == 1  # a new entry, not the old one
+
+
+def test_a_friction_problem_left_unresolved_is_a_named_status():
+    """With a pivot cap of zero the first friction problem stops the run with its named status."""
+    cfg = BladedDisk(blades=4, engine_order=1)
+    integ = ContactIntegrator(cfg.build(), max_pivots=0)
+    y = integ.initial_state()
+    cm = integ.mode_of(y)
+    status, cm, t = integ.advance(y, cm, 0, 20)
+    assert status == contract.STATUS_FRICTION_UNRESOLVED and t > 0
+    r = simulate(cfg.build(), periods=20, raise_on_error=False)
+    assert r.status == contract.STATUS_OK and r.counters["friction_pivots"] > 0
