@@ -1,7 +1,6 @@
 """The kernel contract: named counters and statuses, the run buffer, a cache that cannot go stale."""
 
 import numpy as np
-import pytest
 
 from blademodel.config import BladedDisk
 from blademodel.numeric import ContactIntegrator, contract, simulate

@@ -58,13 +58,11 @@ while *some* admissible distribution exists.
 
 import math  # noqa: F401
 
-import numpy as np  # noqa: F401
-
 from blademodel.numeric.contract import (C_BISECTIONS, C_EVENTS, C_FRICTION_PIVOTS, C_LOGGED, C_RECORDS, C_RHS,
                                          C_STEPS, F_B, F_CG, F_D, F_DL, F_F, F_FR, F_L, F_N, F_ND, F_NULL, F_SG,
-                                         F_V, F_X, F_YEV, F_Z, H_LPW, MAX_LAW_STATES, H_N, H_NC, H_NF, H_NG, H_NLAW, O_CI, O_CIDX,
-                                         O_CLAW, O_CP, O_CSO, O_FG, O_FI, O_KI, O_KP, O_LP, R_CV, R_FC, R_FS,
-                                         R_GAP, R_GN, R_GR, R_INVM, R_K, R_KV, R_OM, R_P, R_W, S_MAX_CONE_RATIO,
+                                         F_V, F_X, F_YEV, F_Z, H_N, H_NC, H_NF, H_NG, H_NLAW, MAX_LAW_STATES,
+                                         O_CI, O_CIDX, O_CLAW, O_CP, O_CSO, O_FG, O_FI, O_KI, O_KP, R_CV, R_FC,
+                                         R_FS, R_GAP, R_GN, R_GR, R_INVM, R_K, R_KV, R_OM, R_W, S_MAX_CONE_RATIO,
                                          STATUS_EVENT_STORM, STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE,
                                          STATUS_OK)
 

@@ -9,7 +9,7 @@ import warnings
 
 from ..model import Model
 from .contract import (C_LOGGED, C_RECORDS, COUNTER_NAMES, N_COUNTERS, N_STATS, S_MAX_CONE_RATIO, STAT_NAMES,
-                       STATUS_EVENT_STORM, STATUS_NAMES, STATUS_OK)
+                       STATUS_EVENT_STORM, STATUS_FRICTION_UNRESOLVED, STATUS_NAMES, STATUS_NONFINITE, STATUS_OK)
 from .integrator import HybridIntegrator, excitation_period  # noqa: F401  (re-exported)
 from .kernels import make_integrator
 from .result import SimulationError, SimulationResult
@@ -150,9 +150,12 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
         labels, mode_idx, final_idx, contact = list(modes), rec_mode[:nr], int(mode), None
         mode_label = modes[int(mode)]
     n_poinc = periods if status == 0 else max(0, int(t_stop / T) - transient)
-    message = "done" if status == STATUS_OK else (
-        f"{STATUS_NAMES.get(int(status), 'failure')} at t = {t_stop:.6g} s in mode '{mode_label}'"
-        + (f" (more than {max_events_per_step} events in one step)" if status == STATUS_EVENT_STORM else ""))
+    where = f"at t = {t_stop:.6g} s in mode '{mode_label}'"
+    message = {STATUS_OK: "done",
+               STATUS_NONFINITE: f"the state became non-finite {where}",
+               STATUS_EVENT_STORM: f"event storm: more than {max_events_per_step} events in one step {where}",
+               STATUS_FRICTION_UNRESOLVED: f"the friction problem of an event was not resolved {where}"
+               }.get(int(status), f"{STATUS_NAMES.get(int(status), 'failure')} {where}")
     counter_dict = dict(zip(COUNTER_NAMES, map(int, counters)))
     if per_contact:
         counter_dict.update(dict(zip(STAT_NAMES, map(float, stats))))
