@@ -1,5 +1,7 @@
 """The per-contact kernel on bladed disks: symmetry, exact linear limits, energy, a bonded ring."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
@@ -8,6 +10,8 @@ from scipy.linalg import null_space
 from blademodel.config import BladedDisk, BladePair
 from blademodel.numeric import ContactIntegrator, simulate
 from blademodel.numeric.energy import energy_balance
+
+MODELS = Path(__file__).resolve().parents[1] / "models"
 
 
 def _blade_histories(r, N):
@@ -184,3 +188,34 @@ def test_ring_sticks_exactly_while_some_admissible_distribution_exists():
         r = simulate(c.build(), periods=2, steps_per_period=1000, y0=y0, mode0=np.ones(c.blades, dtype=int))
         assert (r.counters["events"] > 0) == slips, (factor, r.counters)
         assert r.counters["max_cone_ratio"] <= 1 + 1e-9
+
+
+def test_sweep_over_the_engine_order_of_a_disk(tmp_path):
+    """Sweeps store the disk's points and its cone diagnostic; EO 0 moves every blade alike (no contact)."""
+    from blademodel.sweep import Study, open_result, run_study
+    study = Study(name="disk", base={"model": "bladed_disk", "blades": 6, "friction": "coulomb"},
+                  sweep={"engine_order": {"values": [0, 1, 3]}},
+                  run={"transient": 30, "periods": 6, "steps_per_period": 600, "vibration_reduction": True})
+    run_study(study, tmp_path / "disk.nc", workers=1, progress=None)
+    ds = open_result(tmp_path / "disk.nc")
+    assert (ds["error"] == "").all() and int(ds["done"].sum()) == 3
+    events, pd_, cone = ds["events"].values, ds["Pd"].values, ds["max_cone_ratio"].values
+    assert events[0] == 0 and abs(pd_[0]) < 1e-9          # in phase: the shrouds never touch
+    assert (events[1:] > 0).all() and (pd_[1:] > 1).all()
+    assert (cone <= 1 + 1e-9).all() and cone[1:].max() > 0.5
+
+
+def test_simulate_command_on_a_disk(tmp_path):
+    import json
+    import subprocess
+    import sys
+    out = tmp_path / "r.npz"
+    cp = subprocess.run([sys.executable, "-m", "blademodel", "simulate", str(MODELS / "bladed_disk_24.yaml"),
+                         "--set", "blades=6", "--set", "engine_order=2", "--transient", "20", "--periods", "4",
+                         "--json", "--out", str(out)], capture_output=True, text=True, check=True)
+    rep = json.loads(cp.stdout)
+    assert rep["params"]["blades"] == 6 and rep["counters"]["max_cone_ratio"] <= 1 + 1e-9
+    data = np.load(out)
+    assert data["contact_f"].shape == data["contact_N"].shape == (4 * 1000 + 1, 6)
+    mu = rep["params"]["mu"]
+    assert (np.abs(data["contact_f"]) <= mu * data["contact_N"] * (1 + 1e-9) + 1e-12).all()
