@@ -34,7 +34,9 @@ through zero for a sticking one. Every guard of the old modes that is past zero 
 the event (simultaneous events) fires too. The state is taken strictly past the
 located root (the first ``t_e + d``, ``d`` = 0, 1 ulp, doubling, on the dense
 output, at which the reported guard is strictly past zero), like the kernel, which
-keeps the far end of its bisection bracket.
+keeps the far end of its bisection bracket. A guard whose root coincides with the
+reported one may lie a rounding error short of zero there; it fires too if it is
+within ``simultaneity_tol`` of zero relative to the magnitude of its terms.
 
 Friction problem (at every event and at the start): the closed contacts that are
 sticking, that fired a ``v = 0`` or stick guard, or whose ``|v|`` is at most
@@ -49,6 +51,12 @@ expected (the Delassus matrix of an open chain is positive definite); several ar
 accepted only when they give the same friction forces to ``tie_tol`` (a tie at
 round-off on a cone boundary), and the least violating one is taken. Otherwise
 :class:`FrictionProblemError` is raised, so a test using the reference fails.
+
+Implementation: for fixed modes every quantity (``N``, ``f``, the accelerations, the
+guards) is affine in ``X = (q, u, 1, F(t))``. :meth:`CoulombReference._linear` is the
+plain computation above; applied once per mode combination to the columns of the
+identity it gives those affine maps, which the flow, the event functions and the
+enumeration all use (one arithmetic for all three, and a fast right-hand side).
 
 Builders: :func:`row_chain` writes the matrices of a row of 2-DOF blades by hand
 from the parameters of ``models/blade_row_3.yaml`` (the conventions of
@@ -215,14 +223,19 @@ class CoulombReference:
         cannot cross zero twice unseen within one step
     v_tol : ``|v|`` at most this counts as zero (m/s)
     cone_tol, tie_tol : see the module docstring
+    simultaneity_tol : at an event, a guard of the old modes that was on its starting side
+        at the last step's start and is now within this fraction of the sum of its
+        terms' magnitudes of zero fires too (a coincident root a rounding error short)
     """
 
     def __init__(self, chain: ContactChain, *, rtol: float = 1e-12, atol=1e-15, max_step: float | None = None,
-                 v_tol: float = 1e-12, cone_tol: float = 1e-9, tie_tol: float = 1e-6):
+                 v_tol: float = 1e-12, cone_tol: float = 1e-9, tie_tol: float = 1e-6,
+                 simultaneity_tol: float = 1e-12):
         self.c = chain
         self.rtol, self.atol = rtol, atol
         self.max_step = chain.period / 100 if max_step is None else max_step
         self.v_tol, self.cone_tol, self.tie_tol = v_tol, cone_tol, tie_tol
+        self.simultaneity_tol = simultaneity_tol
         self._W = chain.W
         self._cache: dict = {}
 
@@ -517,11 +530,15 @@ class CoulombReference:
             while k_sample < len(res.sample_t) and res.sample_t[k_sample] <= te:
                 res.samples[k_sample] = sol.sol(res.sample_t[k_sample])
                 k_sample += 1
-            # every guard of the old modes that is past zero fires (simultaneous events)
+            # every guard of the old modes that is past zero, or at zero to round-off, fires (simultaneous
+            # events: a guard whose root coincides with the reported one may lie a rounding error short)
             t_prev, y_prev = (sol.t[-2], sol.y[:, -2]) if sol.t.size >= 2 else (t, y)
             g0 = self.guard_values(t_prev, y_prev, cm)
             g1 = self.guard_values(te, ye, cm)
-            fired = [i for i in range(len(glist)) if self._crossed(g0[i], g1[i], glist[i][2])]
+            eps = self.simultaneity_tol * (np.abs(self._guard_matrix(cm)) @ np.abs(self._X(te, ye)))
+            fired = [i for i in range(len(glist))
+                     if self._crossed(g0[i], g1[i], glist[i][2])
+                     or (glist[i][2] * g0[i] < 0.0 and abs(g1[i]) <= eps[i])]
             if i_rep not in fired:
                 fired.append(i_rep)
             new = modes.copy()
