@@ -58,7 +58,10 @@ def test_one_element_is_the_bilinear_law(gamma, F0):
     assert_allclose(ri.events["t"], rb.events["t"], rtol=1e-12, atol=0)
     yb, yi = rb.final_state, ri.final_state
     assert ri.state_names[:9] == rb.state_names[:8] + ["z1"]
-    assert np.max(np.abs(yi[:9] - yb)) <= 1e-12 * np.max(np.abs(yb))
+    # Iwan sets a sticking element's stretch to its slip force exactly (its shared stick guard must not
+    # start below zero), the bilinear law keeps the slip phase's integration drift: the runs differ by
+    # that correction (measured 6e-12 and 5e-11 of the largest state after 40 periods).
+    assert np.max(np.abs(yi[:9] - yb)) <= 1e-10 * np.max(np.abs(yb))
     # the element's flag agrees with the bilinear law's final mode
     flag = {"stick": 0.0, "slip+": 1.0, "slip-": -1.0, "open": 0.0}[rb.mode_names[rb.final_mode]]
     assert yi[ri.index("s1")] == flag

@@ -98,7 +98,11 @@ class Iwan(FrictionLaw):
         element past its slip force and loading further (``mu N phi_i - kd_i z_i
         < 0`` and ``v > mu phi_i Ndot / kd_i``) slips, ``s_i = +1``, and likewise
         ``-1``; a slipping element that unloads (``s_i (v - dz_i/dt) < 0``)
-        sticks, ``s_i = 0``; every other element keeps its mode.
+        sticks, ``s_i = 0``, with its stretch set to its slip force exactly
+        (``kd_i z_i = s_i mu N phi_i``, which the slip phase holds only to the
+        integration error: a stretch a rounding error past it would start the
+        shared stick guard below zero, where it is never seen to cross); every
+        other element keeps its mode.
     Why shared guards
         The solver fires one guard per event and evaluates the guards afresh
         after it, so a guard that crossed zero in the same instant as the one that
@@ -238,11 +242,16 @@ class Iwan(FrictionLaw):
             loads[0].append(sp.Piecewise((up, sticking), (one, True)))
             loads[1].append(sp.Piecewise((down, sticking), (one, True)))
             unloads.append(sp.Piecewise((one, sticking), (unloading, True)))
+            sticks_now = sp.And(sp.Not(sticking), unloading < 0)
             switch[f"s{i}"] = sp.Piecewise(
                 (1, sp.And(sticking, up < 0, ctx.v - rate > 0)),
                 (-1, sp.And(sticking, down < 0, ctx.v + rate < 0)),
-                (0, sp.And(sp.Not(sticking), unloading < 0)),
+                (0, sticks_now),
                 (s, True))
+            # An element that sticks keeps the stretch of its slip force exactly: the slip phase holds
+            # kd_i z_i = s mu N phi_i only to the integration error, and a stretch a rounding error past
+            # the force would start the shared stick guard below zero, where it never crosses.
+            switch[f"z{i}"] = sp.Piecewise((s * limit / k_i, sticks_now), (z, True))
         settle = [Candidate("closed", sp.true, switch)]
         return [Guard(_least(loads[0]), -1, settle, "stick->slip+"),
                 Guard(_least(loads[1]), -1, settle, "stick->slip-"),
