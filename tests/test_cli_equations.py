@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -159,3 +160,153 @@ def test_pretty_and_latex_of_the_row_head_every_mode():
         assert rf"\paragraph{{Mode \texttt{{{m.name}}}}}" in tex
     with pytest.raises(KeyError, match="c12=open,c23=open"):
         pretty(system, "stick")
+
+
+# --- several contacts: one mode at a time, or one contact ----------------------------------------
+ROW = str(MODELS / "blade_row_3.yaml")
+RING = str(MODELS / "bladed_disk_24.yaml")
+COULOMB = str(MODELS / "blade_pair_coulomb.yaml")
+
+
+def test_several_contacts_show_the_open_mode_and_how_to_ask_for_others(capsys):
+    code, out, err = run_cli(capsys, "equations", ROW, "--ascii")
+    assert code == 0 and err == ""
+    assert out.startswith("blade_row_3: mode open (every contact)\n")
+    assert out.count("blade_row_3: mode") == 1                     # nothing enumerated
+    assert "N_c12" not in out and "f_c23" not in out                # every contact open
+    hint = out.strip().splitlines()[-1]
+    assert "16 mode combinations" in hint
+    assert "--mode c12=stick,c23=stick" in hint and "--contact c12" in hint
+
+
+def test_mode_assignment(capsys):
+    code, out, err = run_cli(capsys, "equations", ROW, "--mode", "c12=stick,c23=slip+", "--ascii")
+    assert code == 0 and err == ""
+    assert out.startswith("blade_row_3: mode c12=stick,c23=slip+\n")
+    assert "--mode" not in out                                       # no hint when a mode is asked for
+    for needle in ("N_c12 = k*", "f_c12 = ", "N_c23 = k*", "f_c23 = kd*z", "z'(t) = "):
+        assert needle in out, needle
+    assert "m*x3''(t) + cx*x3'(t) + kx*x3" in out
+
+
+def test_mode_assignment_leaves_other_contacts_open(capsys):
+    code, out, _ = run_cli(capsys, "equations", ROW, "--mode", "c12=stick", "--ascii")
+    assert code == 0
+    assert out.startswith("blade_row_3: mode c12=stick (others open)\n")
+    assert "f_c12 = " in out and "N_c23" not in out and "z'(t)" not in out
+
+
+def test_mode_assignment_latex(capsys):
+    code, out, _ = run_cli(capsys, "equations", ROW, "--mode", "c12=stick", "--latex")
+    assert code == 0
+    assert out.count(r"\begin{align*}") == 1 == out.count(r"\end{align*}")
+    assert r"\texttt{c12=stick (others open)}" in out and r"\intertext{where}" in out
+
+
+def test_open_mode_latex_has_the_hint_as_a_comment(capsys):
+    code, out, _ = run_cli(capsys, "equations", ROW, "--latex")
+    assert code == 0
+    assert out.count(r"\begin{align*}") == 1
+    assert out.strip().splitlines()[-1].startswith("% Only the mode with every contact open is shown")
+
+
+def test_mode_open_is_every_contact_open(capsys):
+    code, out, _ = run_cli(capsys, "equations", ROW, "--mode", "open", "--ascii")
+    assert code == 0 and out.startswith("blade_row_3: mode open (every contact)\n") and "--contact" not in out
+
+
+def test_one_contact_model_takes_a_contact_assignment_too(capsys):
+    _, by_name, _ = run_cli(capsys, "equations", COULOMB, "--mode", "stick")
+    code, by_assignment, _ = run_cli(capsys, "equations", COULOMB, "--mode", "c=stick")
+    assert code == 0 and by_assignment == by_name
+
+
+def test_contact_equations(capsys):
+    code, out, err = run_cli(capsys, "equations", ROW, "--contact", "c23", "--ascii")
+    assert code == 0 and err == ""
+    assert out.startswith("blade_row_3: contact c23 (bodies 2 and 3; friction law Jenkins)\n")
+    for mode in ("open", "stick", "slip+", "slip-"):
+        assert f"\nmode {mode}\n" in out
+    for needle in ("delta_c23 = ", "r_c23 = ", "v_c23 = ", "N_c23 = delta_c23*k", "Ndot_c23 = ",
+                   "f_c23 = kd*z", "z'(t) = v_c23", "guard close: delta_c23   rises through 0",
+                   "guard stick->slip+: N_c23*mu - kd*z   falls through 0", "-> stick, z = 0"):
+        assert needle in out, needle
+    assert "x1" not in out                                   # only the contact's own bodies
+
+
+def test_contact_equations_of_a_coulomb_stick(capsys):
+    code, out, _ = run_cli(capsys, "equations", ROW, "--contact", "c12")
+    assert code == 0
+    assert "f_c12: the stick constraint force, which holds v̇_c12 = 0" in out
+    assert "→ stick if N_c12⋅μ - │f_c12│ ≥ 0" in out
+
+
+def test_contact_equations_latex(capsys):
+    code, out, _ = run_cli(capsys, "equations", ROW, "--contact", "c12", "--latex")
+    assert code == 0
+    assert out.startswith(r"\paragraph{Contact \texttt{c12}}")
+    assert out.count(r"\begin{align*}") == 1 and out.count(r"\intertext{mode") == 4
+    assert r"\texttt{stick->slip+} &: " in out
+
+
+def test_contact_equations_of_a_one_contact_model(capsys):
+    code, out, _ = run_cli(capsys, "equations", BILINEAR, "--contact", "c", "--ascii")
+    assert code == 0 and "contact c (bodies 1 and 2; friction law Jenkins)" in out
+
+
+@pytest.mark.parametrize("argv, needles", [
+    (["--mode", "c99=stick"], ["--mode c99=stick", "no contact 'c99'", "contacts are c12, c23"]),
+    (["--mode", "c12=glide"], ["contact c12 has no mode 'glide'", "its modes are open, stick, slip+, slip-"]),
+    (["--mode", "c12=stick,c23=slide"], ["contact c23 has no mode 'slide'", "open, stick, slip+, slip-"]),
+    (["--mode", "stick"], ["'stick' is not CONTACT=MODE", "contacts are c12, c23"]),
+    (["--mode", "c12=stick,c12=open"], ["contact c12 is named twice"]),
+    (["--contact", "c9"], ["no contact 'c9'; contacts are c12, c23"]),
+])
+def test_mode_and_contact_errors_exit_2(capsys, argv, needles):
+    code, out, err = run_cli(capsys, "equations", ROW, *argv)
+    assert code == 2 and out == ""
+    assert err.startswith("error: ") and "Traceback" not in err
+    for needle in needles:
+        assert needle in err, err
+
+
+def test_one_contact_model_errors_name_the_contact(capsys):
+    code, _, err = run_cli(capsys, "equations", COULOMB, "--mode", "c1=stick")
+    assert code == 2 and "no contact 'c1'; contacts are c" in err
+
+
+def test_mode_and_contact_exclude_each_other(capsys):
+    with pytest.raises(SystemExit) as info:
+        cli.main(["equations", ROW, "--mode", "open", "--contact", "c12"])
+    assert info.value.code == 2
+    assert "not allowed with" in capsys.readouterr().err
+
+
+def test_bladed_disk_mode_answers_in_seconds(capsys):
+    t0 = time.perf_counter()
+    code, out, err = run_cli(capsys, "equations", RING, "--mode", "c1=stick,c2=stick", "--ascii")
+    elapsed = time.perf_counter() - t0
+    assert code == 0 and err == ""
+    assert elapsed < 10, elapsed
+    assert out.splitlines()[0].endswith("mode c1=stick,c2=stick (others open)")
+    assert out.count("''(t)") == 48                       # one equation per coordinate
+    assert "f_c1 = " in out and "f_c2 = " in out and "f_c3" not in out
+
+
+def test_bladed_disk_without_flags_shows_one_mode(capsys):
+    code, out, _ = run_cli(capsys, "equations", RING, "--ascii")
+    assert code == 0
+    assert out.count(": mode ") == 1 and "281474976710656 mode combinations" in out
+    assert "--mode c1=stick,c2=stick" in out and "--contact c1" in out
+
+
+def test_bladed_disk_contact(capsys):
+    code, out, _ = run_cli(capsys, "equations", RING, "--contact", "c24", "--ascii")
+    assert code == 0 and "contact c24 (bodies 24 and 1; friction law Coulomb)" in out
+
+
+def test_ring_all_sticking_is_reported(capsys):
+    every = ",".join(f"c{i}=stick" for i in range(1, 25))
+    code, _, err = run_cli(capsys, "equations", RING, "--mode", every)
+    assert code == 2 and "Traceback" not in err
+    assert "cannot all stick rigidly" in err and "not independent" in err

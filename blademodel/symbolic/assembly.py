@@ -20,12 +20,14 @@ Three entry points share the same pieces:
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass
 from typing import Callable, Mapping
 
 import sympy as sp
+from sympy.matrices.exceptions import NonInvertibleMatrixError
 
 from ..components.friction.base import STICK, Candidate, ContactContext, Guard
 from ..model import Model
@@ -86,8 +88,9 @@ class _Assembly:
     N_sym: list
     state_syms: list
 
-    @property
+    @functools.cached_property
     def Minv(self) -> sp.Matrix:
+        """The inverse of the (diagonal) mass matrix; do not modify it in place."""
         return sp.diag(*[1 / self.masses[c] for c in self.coords])
 
 
@@ -203,7 +206,7 @@ def _contact_forces(asm: _Assembly, combo, solve=_joint_solve):
     """Loads of ``combo`` with the stick forces solved jointly.
 
     ``solve(asm, constrained, Fvec)`` gives the stick forces (:func:`_joint_solve`
-    for :func:`derive`; :class:`_ComponentSolver` for :func:`derive_mode`).
+    for :func:`derive`; :class:`_GroupSolver` for :func:`derive_mode`).
 
     Returns
     -------
@@ -276,8 +279,12 @@ def _contact_guards(c, lm, ctx: ContactContext, delta) -> list[Guard]:
 _Resolver = Callable[[tuple], tuple]
 
 
-def _guards(asm: _Assembly, mode: Mode, resolve: _Resolver) -> list[GuardSpec]:
-    """Guards of ``mode`` with their transitions; targets are identified by ``resolve``."""
+def _guards(asm: _Assembly, mode: Mode, resolve: _Resolver, project=_projection) -> list[GuardSpec]:
+    """Guards of ``mode`` with their transitions.
+
+    ``resolve(combo)`` identifies a target mode (see :data:`_Resolver`);
+    ``project(asm, constrained)`` gives the velocity reset onto its stick constraints.
+    """
     contacts, ctxs = asm.contacts, asm.ctxs
     projections: dict = {}
 
@@ -300,7 +307,7 @@ def _guards(asm: _Assembly, mode: Mode, resolve: _Resolver) -> list[GuardSpec]:
             if set(constrained) - set(mode.constrained):
                 key = tuple(constrained)
                 if key not in projections:
-                    projections[key] = _projection(asm, constrained)
+                    projections[key] = project(asm, constrained)
                 reset.update(projections[key])
             cond = subs_f(cand.when, force_of(j), j)
             out.append(Transition(target, cond, reset))
@@ -310,7 +317,8 @@ def _guards(asm: _Assembly, mode: Mode, resolve: _Resolver) -> list[GuardSpec]:
     for j, c in enumerate(contacts):
         lm = _law_mode(mode.local, j)
         for g in _contact_guards(c, lm, ctxs[j], asm.geom[j]["delta"]):
-            guards.append(GuardSpec(subs_f(g.expr, mode.friction_forces[j], j), g.direction, f"{c.name}: {g.name}", j,
+            expr = subs_f(g.expr, mode.friction_forces[j], j)  # (the penetration has no f: unchanged)
+            guards.append(GuardSpec(expr, g.direction, f"{c.name}: {g.name}", j,
                                     transitions(j, list(g.candidates))))
     return guards
 
@@ -341,6 +349,183 @@ def _energy(asm: _Assembly, modes: list[Mode]) -> dict:
         energy["law"].append(law_e)
         energy["friction_power"].append(fric_p)
     return energy
+
+
+class _Dependent(ValueError):
+    """Sticking contacts whose constraints are not independent: their forces are not unique."""
+
+
+def _simplify_parameters(expr):
+    """Simplify an expression of the parameters only (an entry of ``J M^-1 J^T`` or its inverse)."""
+    expr = sp.cancel(expr)
+    return sp.factor(sp.trigsimp(expr) if expr.has(sp.sin, sp.cos, sp.tan) else expr)
+
+
+def _dependent(asm: _Assembly, group) -> str:
+    names = [asm.contacts[j].name for j in group]
+    return (f"contacts {_name_list(names)} cannot all stick rigidly: their stick constraints are not "
+            f"independent (J M^-1 J^T is singular), so the stick forces are not unique; "
+            f"let one of them slip (e.g. {names[-1]}=slip+)" if len(names) > 1 else
+            f"contact {names[0]} cannot stick rigidly: its relative slip does not move")
+
+
+def _name_list(names, limit: int = 12) -> str:
+    """``c1, c2, c3`` (long lists shortened to ``c1, c2, c3, ..., c24 (24 contacts)``)."""
+    names = list(names)
+    if len(names) <= limit:
+        return ", ".join(names)
+    return ", ".join(names[:3]) + f", ..., {names[-1]} ({len(names)} contacts)"
+
+
+class _GroupSolver:
+    """Stick forces and velocity projections solved per group of coupled sticking contacts.
+
+    Two sticking contacts are coupled when they slide a common coordinate;
+    ``J M^-1 J^T`` is block diagonal over the groups, so each group is solved on
+    its own and the solution is cached (keyed by the loads it reads). A ring with
+    two sticking neighbours solves one 2x2 group, however many contacts it has.
+
+    A group of one contact is solved exactly as :func:`derive` solves it (same
+    expressions). A larger group first simplifies ``J M^-1 J^T`` (it depends on
+    parameters only: ``cos(a)**2 + sin(a)**2`` becomes 1) and inverts it, which
+    keeps the forces compact where the joint ``LUsolve`` of :func:`derive` nests
+    fractions; the forces are the same functions, written differently.
+    """
+
+    def __init__(self, asm: _Assembly):
+        self.asm = asm
+        self.index = {c: i for i, c in enumerate(asm.coords)}
+        self._inverse: dict = {}
+        self._forces: dict = {}
+        self._resets: dict = {}
+
+    def groups(self, constrained) -> list[list[int]]:
+        """``constrained`` split into groups of contacts coupled through shared sliding coordinates."""
+        groups: list[tuple[set, list]] = []
+        for j in constrained:
+            cj = set(self.asm.geom[j]["slides"])
+            merged = [g for g in groups if g[0] & cj]
+            rest = [g for g in groups if not g[0] & cj]
+            coords, members = set(cj), [j]
+            for g in merged:
+                coords |= g[0]
+                members += g[1]
+            groups = rest + [(coords, members)]
+        return sorted(sorted(m) for _, m in groups)
+
+    def _coords(self, group) -> list:
+        slides = set().union(*(self.asm.geom[j]["slides"] for j in group))
+        return [c for c in self.asm.coords if c in slides]
+
+    def _system(self, group):
+        """``(coords, J, M^-1, (J M^-1 J^T)^-1 simplified)`` of a group of several contacts.
+
+        Raises
+        ------
+        _Dependent
+            When the group's stick constraints are not independent.
+        """
+        key = tuple(group)
+        if key not in self._inverse:
+            asm = self.asm
+            coords = self._coords(group)
+            J = sp.Matrix([[asm.geom[j]["dr"][c] for c in coords] for j in group])
+            Minv = sp.diag(*[1 / asm.masses[c] for c in coords])
+            A = (J * Minv * J.T).applyfunc(_simplify_parameters)
+            try:
+                Ainv = A.inv().applyfunc(_simplify_parameters)
+            except NonInvertibleMatrixError:
+                self._inverse[key] = None
+            else:
+                self._inverse[key] = (coords, J, Minv, Ainv)
+        if self._inverse[key] is None:
+            raise _Dependent(_dependent(self.asm, group))
+        return self._inverse[key]
+
+    def solve_group(self, group, Fvec) -> list:
+        """Stick forces of one group, in the order of ``group``, for the loads ``Fvec``.
+
+        Raises
+        ------
+        _Dependent
+            When the group's stick constraints are not independent.
+        """
+        coords = self._coords(group)
+        key = (tuple(group), tuple(Fvec[self.index[c]] for c in coords))
+        if key not in self._forces:
+            if len(group) == 1:
+                try:
+                    lam = _joint_solve(self.asm, group, Fvec)
+                except NonInvertibleMatrixError:
+                    raise _Dependent(_dependent(self.asm, group)) from None
+            else:
+                coords, J, Minv, Ainv = self._system(group)
+                b = J * Minv * sp.Matrix([Fvec[self.index[c]] for c in coords])
+                lam = [_tidy(x) for x in Ainv * b]
+            self._forces[key] = lam
+        return self._forces[key]
+
+    def __call__(self, asm, constrained, Fvec) -> list:
+        """The stick forces of ``constrained`` (the ``solve`` of :func:`_contact_forces`)."""
+        lam = {}
+        for group in self.groups(constrained):
+            lam.update(zip(group, self.solve_group(group, Fvec)))
+        return [lam[j] for j in constrained]
+
+    def force(self, combo, j):
+        """Stick force of contact ``j`` in the target mode ``combo``: only ``j``'s group is solved.
+
+        When that group's constraints are dependent (closing the last open contact
+        of a ring of sticking ones) the force is not unique: ``f_c`` is returned
+        unresolved, so the transition's condition keeps the symbol.
+        """
+        F, _, _, _, constrained = _loads(self.asm, combo)
+        group = next(g for g in self.groups(constrained) if j in g)
+        Fvec = sp.Matrix([F[c] for c in self.asm.coords])
+        try:
+            return self.solve_group(group, Fvec)[group.index(j)]
+        except _Dependent:
+            return self.asm.f_sym[j]
+
+    def _independent(self, group) -> list:
+        """``group`` without one contact whose constraint the others imply (same velocity projection)."""
+        if len(group) > 1:
+            for j in reversed(group):
+                rest = [i for i in group if i != j]
+                try:
+                    if len(rest) > 1:
+                        self._system(rest)
+                    return rest
+                except _Dependent:
+                    continue
+        raise _Dependent(_dependent(self.asm, group))
+
+    def _reset(self, group) -> dict:
+        """Velocity reset onto ``v = 0`` of one group's contacts, on the coordinates they slide."""
+        asm, u = self.asm, self.asm.u
+        if len(group) > 1:
+            try:
+                self._system(group)
+            except _Dependent:  # v = 0 of the others implies the dropped contact's
+                group = self._independent(group)
+        if len(group) == 1:
+            full = _projection(asm, group)
+            return {u[c]: full[u[c]] for c in self._coords(group)}
+        coords, J, Minv, Ainv = self._system(group)
+        u_vec = sp.Matrix([u[c] for c in coords])
+        du = Minv * J.T * (Ainv * (J * u_vec))
+        return {u[c]: sp.expand(u[c] - du[i]) for i, c in enumerate(coords)}
+
+    def projection(self, asm, constrained) -> dict:
+        """Velocity reset onto ``v = 0`` of every stick constraint (the ``project`` of :func:`_guards`)."""
+        u = asm.u
+        reset = {u[c]: u[c] for c in asm.coords}
+        for group in self.groups(constrained):
+            key = tuple(group)
+            if key not in self._resets:
+                self._resets[key] = self._reset(group)
+            reset.update(self._resets[key])
+        return reset
 
 
 # --- every mode --------------------------------------------------------------------------
@@ -408,7 +593,7 @@ def _combo(contacts, assignment: Mapping[str, str]) -> tuple:
     by_name = {c.name: c for c in contacts}
     for name, mode in assignment.items():
         if name not in by_name:
-            valid = ", ".join(by_name) if by_name else "none (the model has no contact)"
+            valid = _name_list(by_name) if by_name else "none (the model has no contact)"
             raise KeyError(f"no contact {name!r}; contacts are {valid}")
         if mode not in by_name[name].modes:
             raise KeyError(f"contact {name} has no mode {mode!r}; its modes are "
@@ -416,7 +601,32 @@ def _combo(contacts, assignment: Mapping[str, str]) -> tuple:
     return tuple(assignment.get(c.name, "open") for c in contacts)
 
 
-def derive_mode(model: Model, assignment: Mapping[str, str] | None = None) -> ModeSystem:
+def parse_assignment(text: str) -> dict[str, str]:
+    """``"c12=stick, c23=open"`` -> ``{"c12": "stick", "c23": "open"}``; ``"open"`` -> ``{}``.
+
+    Only the syntax is checked here; :func:`derive_mode` checks the names.
+
+    Raises
+    ------
+    ValueError
+        For an item without ``=`` or a contact named twice.
+    """
+    if text.strip() == "open":
+        return {}
+    out: dict[str, str] = {}
+    for item in text.split(","):
+        name, sep, mode = (x.strip() for x in item.partition("="))
+        if not sep or not name or not mode:
+            raise ValueError(f"{item.strip()!r} is not CONTACT=MODE (a list like c12=stick,c23=slip+; "
+                             f"contacts not named are open)")
+        if name in out:
+            raise ValueError(f"contact {name} is named twice")
+        out[name] = mode
+    return out
+
+
+def derive_mode(model: Model, assignment: Mapping[str, str] | None = None, *,
+                guards: bool = True) -> ModeSystem:
     """Derive one mode of ``model``: its flow, contact forces and guards, nothing else.
 
     Nothing is enumerated: the cost grows with the model (coordinates, contacts
@@ -430,6 +640,10 @@ def derive_mode(model: Model, assignment: Mapping[str, str] | None = None) -> Mo
     assignment : dict of str to str, optional
         Contact name -> mode (``{"c12": "stick"}``); contacts not named are
         ``open``. ``None`` or ``{}``: every contact open.
+    guards : bool
+        Derive the guards and their transitions (most of the work: each
+        transition into a stick mode solves that mode's stick force). ``False``
+        leaves ``mode.guards`` empty, which is all the display needs.
 
     Returns
     -------
@@ -444,14 +658,17 @@ def derive_mode(model: Model, assignment: Mapping[str, str] | None = None) -> Mo
     ------
     KeyError
         For an unknown contact or mode; the message names the valid ones.
+    ValueError
+        When sticking contacts' constraints are dependent (every contact of a
+        ring sticking): their forces are not unique.
     """
     asm = _assemble(model)
     combo = _combo(asm.contacts, dict(assignment or {}))
-    mode, Fdisp = _flow(asm, combo)
+    solver = _GroupSolver(asm)
+    mode, Fdisp = _flow(asm, combo, solver)
 
     targets: list[tuple] = []
     ids: dict = {}
-    solved: dict = {combo: mode.friction_forces}
 
     def resolve(target):
         if target not in ids:
@@ -463,15 +680,12 @@ def derive_mode(model: Model, assignment: Mapping[str, str] | None = None) -> Mo
 
         def force_of(j):
             force = _local_force(asm, target, j)
-            if force is not STICK:
-                return force
-            if target not in solved:  # the stick force needs the joint solve of the target
-                solved[target] = _contact_forces(asm, target)[3]
-            return solved[target][j]
+            return solver.force(target, j) if force is STICK else force
 
         return ids[target], constrained, force_of
 
-    mode.guards.extend(_guards(asm, mode, resolve))
+    if guards:
+        mode.guards.extend(_guards(asm, mode, resolve, solver.projection))
     return ModeSystem(model=model, t=asm.t, q=[asm.q[c] for c in asm.coords],
                       u=[asm.u[c] for c in asm.coords], s=asm.state_syms, params=asm.params,
                       mass_matrix=asm.M, normal_symbols=asm.N_sym, friction_symbols=asm.f_sym,
@@ -506,7 +720,7 @@ def contact_equations(model: Model, name: str) -> ContactEquations:
     """
     by_name = {c.name: c for c in model.contacts}
     if name not in by_name:
-        valid = ", ".join(by_name) if by_name else "none (the model has no contact)"
+        valid = _name_list(by_name) if by_name else "none (the model has no contact)"
         raise KeyError(f"no contact {name!r}; contacts are {valid}")
     c = by_name[name]
     q, u, s = _state_symbols(model)
@@ -529,7 +743,8 @@ def contact_equations(model: Model, name: str) -> ContactEquations:
     return ContactEquations(
         model=model, name=name, bodies=tuple(b.name for b in c.bodies), ground=c.body2 is None,
         law=type(c.friction).__name__, q=list(q.values()), u=list(u.values()),
-        penetration=delta, slip=slip, N=N, Ndot=Ndot, v=v, f=f,
+        penetration=delta, slip=slip, k=k, N=N, Ndot=Ndot, v=v, f=f,
         definitions={N: k * delta, v: _derivative(slip, q, u), Ndot: k * _derivative(delta, q, u)},
-        states=states, params=[p.symbol for p in (*c.parameters().values(), *c.friction.parameters().values())],
+        states=states,
+        params=[p.symbol for p in (*c.parameters().values(), *c.friction.parameters().values())],
         modes=modes)

@@ -14,16 +14,19 @@ functions of time, ``x1(t)``, with ``sympy.physics.vector`` dot notation.
 
 from __future__ import annotations
 
-from typing import Optional
+from typing import Optional, Union
 
 import sympy as sp
 from sympy.physics.vector import dynamicsymbols
 from sympy.physics.vector.printing import vlatex, vpprint
 
-from .system import HybridSystem, Mode
+from .system import ContactEquations, HybridSystem, Mode, ModeSystem
+
+#: A whole derived system, or one mode derived alone (:func:`~blademodel.symbolic.assembly.derive_mode`).
+System = Union[HybridSystem, ModeSystem]
 
 
-def _time_functions(system: HybridSystem) -> tuple[sp.Symbol, dict]:
+def _time_functions(system: System) -> tuple[sp.Symbol, dict]:
     """``t`` and the substitution of state symbols by functions of time."""
     t = dynamicsymbols._t
     sub = {system.t: t}
@@ -44,16 +47,16 @@ def _ordered_add(terms: list) -> sp.Expr:
     return terms[0] if len(terms) == 1 else sp.Add(*terms, evaluate=False)
 
 
-def _mode(system: HybridSystem, mode_name: str) -> Mode:
-    return system.mode(mode_name)  # KeyError naming the valid modes
+def _mode(system: System, mode_name: str) -> Mode:
+    return system.modes[system.mode_index(mode_name)]  # KeyError naming the valid modes
 
 
-def equations(system: HybridSystem, mode_name: str) -> list[sp.Eq]:
+def equations(system: System, mode_name: str) -> list[sp.Eq]:
     """Equations of motion of the coordinates in one mode, ``M q'' + ... = RHS``.
 
     Parameters
     ----------
-    system : HybridSystem
+    system : HybridSystem or ModeSystem
     mode_name : str
         A name from ``[m.name for m in system.modes]``.
 
@@ -71,7 +74,7 @@ def equations(system: HybridSystem, mode_name: str) -> list[sp.Eq]:
     KeyError
         For an unknown mode; the message lists the valid ones.
     """
-    _mode(system, mode_name)
+    mode_name = _mode(system, mode_name).name
     t, sub = _time_functions(system)
     rhs_all = system.generalized_forces[mode_name]
     contact_syms = set(system.normal_symbols) | set(system.friction_symbols)
@@ -105,13 +108,16 @@ def _over_common_denominator(expr: sp.Expr, sub: dict) -> sp.Expr:
     return num if den == 1 else sp.Mul(num, sp.Pow(den, -1, evaluate=False), evaluate=False)
 
 
-def definitions(system: HybridSystem, mode_name: str) -> list[sp.Eq]:
+def definitions(system: System, mode_name: str, *, open_contacts: bool = True) -> list[sp.Eq]:
     """What the contact symbols are in one mode, and the law states' rates.
 
     Parameters
     ----------
-    system : HybridSystem
+    system : HybridSystem or ModeSystem
     mode_name : str
+    open_contacts : bool
+        ``False`` leaves out the open contacts' ``N_c = 0``, ``f_c = 0`` and their
+        states' rates when zero (many contacts, few closed).
 
     Returns
     -------
@@ -123,32 +129,48 @@ def definitions(system: HybridSystem, mode_name: str) -> list[sp.Eq]:
     mode = _mode(system, mode_name)
     t, sub = _time_functions(system)
     out = []
-    for N, f, Nv, fv in zip(system.normal_symbols, system.friction_symbols,
-                            mode.normal_forces, mode.friction_forces):
+    shown = [open_contacts or local != "open" for local in mode.local]
+    for N, f, Nv, fv, show in zip(system.normal_symbols, system.friction_symbols,
+                                  mode.normal_forces, mode.friction_forces, shown):
+        if not show:
+            continue
         out.append(sp.Eq(N, sp.sympify(Nv).xreplace(sub), evaluate=False))
         out.append(sp.Eq(f, _over_common_denominator(sp.sympify(fv), sub), evaluate=False))
-    for s, rate in zip(system.s, mode.state_rates):
+    owners = ([j for j, c in enumerate(system.model.contacts) for _ in c.friction.states]
+              if not open_contacts else [None] * len(system.s))
+    for s, rate, j in zip(system.s, mode.state_rates, owners):
+        if j is not None and not shown[j] and sp.sympify(rate) == 0:
+            continue
         out.append(sp.Eq(dynamicsymbols(s.name).diff(t), sp.sympify(rate).xreplace(sub), evaluate=False))
     return out
 
 
-def _modes(system: HybridSystem, mode: Optional[str]) -> list[str]:
+def _modes(system: System, mode: Optional[str]) -> list[str]:
     if mode is None:
         return [m.name for m in system.modes]
     return [_mode(system, mode).name]
 
 
-def _heading(system: HybridSystem, name: str) -> str:
+def _heading(system: System, name: str) -> str:
     model = getattr(system.model, "name", "model")
+    if isinstance(system, ModeSystem):
+        name = system.label
     return f"{model}: mode {name}"
 
 
-def pretty(system: HybridSystem, mode: Optional[str] = None, *, unicode: bool = True) -> str:
+def _definitions(system: System, name: str) -> list[sp.Eq]:
+    """The definitions printed: a mode derived alone leaves out its open contacts."""
+    return definitions(system, name, open_contacts=not isinstance(system, ModeSystem))
+
+
+def pretty(system: System, mode: Optional[str] = None, *, unicode: bool = True) -> str:
     """Pretty-printed equations of every mode (or of ``mode``), one headed block each.
 
     Parameters
     ----------
-    system : HybridSystem
+    system : HybridSystem or ModeSystem
+        A :class:`ModeSystem` is headed by its short label and leaves out the
+        open contacts' zero definitions.
     mode : str, optional
         Only this mode.
     unicode : bool
@@ -164,7 +186,7 @@ def pretty(system: HybridSystem, mode: Optional[str] = None, *, unicode: bool = 
         head = _heading(system, name)
         lines = [head, ("═" if unicode else "=") * len(head)]
         lines += [vpprint(eq, **settings) for eq in equations(system, name)]
-        defs = definitions(system, name)
+        defs = _definitions(system, name)
         if defs:
             lines.append("where")
             lines += ["  " + vpprint(eq, **settings).replace("\n", "\n  ") for eq in defs]
@@ -183,7 +205,7 @@ def _tex_eq(eq: sp.Eq) -> str:
     return f"{vlatex(eq.lhs, order='none')} &= {vlatex(eq.rhs, order='none')}"
 
 
-def latex(system: HybridSystem, mode: Optional[str] = None) -> str:
+def latex(system: System, mode: Optional[str] = None) -> str:
     """LaTeX of every mode (or of ``mode``): a headed ``align*`` block per mode.
 
     Needs ``amsmath``. Contact definitions follow the equations after an
@@ -191,7 +213,7 @@ def latex(system: HybridSystem, mode: Optional[str] = None) -> str:
 
     Parameters
     ----------
-    system : HybridSystem
+    system : HybridSystem or ModeSystem
     mode : str, optional
 
     Returns
@@ -201,10 +223,186 @@ def latex(system: HybridSystem, mode: Optional[str] = None) -> str:
     blocks = []
     for name in _modes(system, mode):
         rows = [_tex_eq(eq) for eq in equations(system, name)]
-        defs = definitions(system, name)
+        defs = _definitions(system, name)
         body = " \\\\\n".join(rows)
         if defs:
             body += " \\\\\n\\intertext{where}\n" + " \\\\\n".join(_tex_eq(eq) for eq in defs)
-        blocks.append(f"\\paragraph{{Mode \\texttt{{{_tex_text(name)}}}}}\n"
+        title = system.label if isinstance(system, ModeSystem) else name
+        blocks.append(f"\\paragraph{{Mode \\texttt{{{_tex_text(title)}}}}}\n"
                       f"\\begin{{align*}}\n{body}\n\\end{{align*}}")
     return "\n\n".join(blocks) + "\n"
+
+
+# --- one contact's own equations -------------------------------------------------------------
+
+_DIRECTION = {-1: "falls through 0", 1: "rises through 0", 0: "crosses 0"}
+
+
+def _contact_sub(ce: ContactEquations) -> dict:
+    """The substitution of the state symbols by functions of time (``Ndot_c`` prints as a dotted N)."""
+    t = dynamicsymbols._t
+    sub = {}
+    for q, u in zip(ce.q, ce.u):
+        f = dynamicsymbols(q.name)
+        sub[q] = f
+        sub[u] = f.diff(t)
+    for s in ce.states.values():
+        sub[s] = dynamicsymbols(s.name)
+    return sub
+
+
+def _uses_Ndot(ce: ContactEquations) -> bool:
+    exprs = []
+    for m in ce.modes:
+        exprs += [m.friction_force, *m.rates.values()]
+        for g in m.guards:
+            exprs.append(g.expr)
+            for c in g.candidates:
+                exprs += [c.when, *c.reset.values()]
+    return any(isinstance(x, sp.Basic) and x.has(ce.Ndot) for x in exprs)
+
+
+def _contact_rows(ce: ContactEquations) -> list[tuple]:
+    """The content of a contact's display as ``(kind, ...)`` rows, shared by text and LaTeX.
+
+    Kinds: ``("eq", Eq, note)``, ``("mode", name)``, ``("stick", f, Eq)``,
+    ``("guard", name, expr, direction text)``, ``("candidate", mode, condition or None, resets)``.
+    """
+    t = dynamicsymbols._t
+    sub = _contact_sub(ce)
+    delta = sp.Symbol(f"delta_{ce.name}")
+    r = sp.Symbol(f"r_{ce.name}")
+
+    def X(expr):
+        expr = sp.sympify(expr)
+        return delta if expr == ce.penetration else expr.xreplace(sub)
+
+    rows = [("eq", sp.Eq(delta, X(ce.penetration.xreplace(sub)), evaluate=False),
+             "penetration: closed while positive"),
+            ("eq", sp.Eq(r, X(ce.slip), evaluate=False), "relative slip"),
+            ("eq", sp.Eq(ce.v, X(ce.definitions[ce.v]), evaluate=False), "relative slip velocity, dr/dt"),
+            ("eq", sp.Eq(ce.N, sp.Mul(ce.k, delta, evaluate=False), evaluate=False),
+             "normal force while closed, 0 while open")]
+    if _uses_Ndot(ce):
+        rows.append(("eq", sp.Eq(ce.Ndot, X(ce.definitions[ce.Ndot]), evaluate=False), "dN/dt while closed"))
+    for m in ce.modes:
+        rows.append(("mode", m.mode))
+        if m.mode == "open":
+            rows.append(("eq", sp.Eq(ce.N, 0, evaluate=False), None))
+        if isinstance(m.friction_force, sp.Basic):
+            rows.append(("eq", sp.Eq(ce.f, X(m.friction_force), evaluate=False), None))
+        else:
+            vdot = sp.Symbol(f"vdot_{ce.name}")
+            rows.append(("stick", ce.f, sp.Eq(vdot, 0, evaluate=False)))
+        for s, rate in m.rates.items():
+            rows.append(("eq", sp.Eq(X(s).diff(t), X(rate), evaluate=False), None))
+        for g in m.guards:
+            rows.append(("guard", g.name, X(g.expr), _DIRECTION[g.direction]))
+            for c in g.candidates:
+                reset = [sp.Eq(X(ce.states[k]), X(v), evaluate=False) for k, v in c.reset.items()
+                         if k in ce.states]
+                rows.append(("candidate", c.mode, None if c.when == sp.true else X(c.when), reset))
+    return rows
+
+
+def _heading_contact(ce: ContactEquations) -> str:
+    model = getattr(ce.model, "name", "model")
+    bodies = f"bodies {ce.bodies[0]} and {ce.bodies[1]}" if len(ce.bodies) == 2 else \
+        f"body {ce.bodies[0]} and the ground"
+    return f"{model}: contact {ce.name} ({bodies}; friction law {ce.law})"
+
+
+def pretty_contact(ce: ContactEquations, *, unicode: bool = True) -> str:
+    """Pretty-printed equations of one contact: geometry, then each of its modes.
+
+    ``N_c``, ``v_c`` and ``f_c`` stay symbols in the law's expressions; a stick
+    mode's ``f_c`` is the constraint force, which depends on the other contacts'
+    modes (``blademodel equations MODEL --mode c=stick,...`` derives it).
+
+    Parameters
+    ----------
+    ce : ContactEquations
+        From :func:`~blademodel.symbolic.assembly.contact_equations`.
+    unicode : bool
+
+    Returns
+    -------
+    str
+    """
+    settings = {"use_unicode": unicode, "wrap_line": False}
+    arrow = "→" if unicode else "->"
+
+    def art(expr, indent):
+        return vpprint(expr, **settings).replace("\n", "\n" + " " * indent)
+
+    def joined(prefix, expr, indent):
+        text = vpprint(expr, **settings)
+        if "\n" in text:  # a two-dimensional expression goes below its label
+            return prefix.rstrip() + "\n" + " " * indent + text.replace("\n", "\n" + " " * indent)
+        return prefix + text
+
+    head = _heading_contact(ce)
+    lines = [head, ("═" if unicode else "=") * len(head)]
+    for row in _contact_rows(ce):
+        kind = row[0]
+        if kind == "eq":
+            eq, note = row[1], row[2]
+            lines.append("  " + art(eq, 2) + (f"    ({note})" if note else ""))
+        elif kind == "mode":
+            lines.append(f"mode {row[1]}")
+        elif kind == "stick":
+            lines.append(f"  {row[1].name}: the stick constraint force, which holds "
+                         f"{vpprint(row[2], **settings)}")
+            lines.append("    (it depends on the other contacts' modes: see --mode)")
+        elif kind == "guard":
+            lines.append(joined(f"  guard {row[1]}: ", row[2], 4) + f"   {row[3]}")
+        elif kind == "candidate":
+            _, mode, when, reset = row
+            text = f"    {arrow} {mode}"
+            if reset:
+                text += ", " + ", ".join(vpprint(eq, **settings) for eq in reset)
+            lines.append(joined(text + " if ", when, 8) if when is not None else text)
+    return "\n".join(lines) + "\n"
+
+
+def latex_contact(ce: ContactEquations) -> str:
+    """LaTeX of one contact's equations: a headed ``align*`` block (needs ``amsmath``).
+
+    Parameters
+    ----------
+    ce : ContactEquations
+
+    Returns
+    -------
+    str
+    """
+    rows = []
+    for row in _contact_rows(ce):
+        kind = row[0]
+        if kind == "eq":
+            rows.append(_tex_eq_sorted(row[1]) + (f" && \\text{{{_tex_text(row[2])}}}" if row[2] else ""))
+        elif kind == "mode":
+            rows.append(f"\\intertext{{mode \\texttt{{{_tex_text(row[1])}}}}}")
+        elif kind == "stick":
+            rows.append(f"{vlatex(row[1])} &: \\text{{the stick constraint force, which holds }} "
+                        f"{vlatex(row[2].lhs)} = 0")
+        elif kind == "guard":
+            rows.append(f"\\texttt{{{_tex_text(row[1])}}} &: {vlatex(row[2])} "
+                        f"\\quad \\text{{{row[3]}}}")
+        elif kind == "candidate":
+            _, mode, when, reset = row
+            text = f"&\\to \\texttt{{{_tex_text(mode)}}}"
+            if reset:
+                text += ",\\ " + ",\\ ".join(f"{vlatex(eq.lhs)} = {vlatex(eq.rhs)}" for eq in reset)
+            if when is not None:
+                text += f" \\text{{ if }} {vlatex(when)}"
+            rows.append(text)
+    body = rows[0]
+    for prev, row in zip(rows, rows[1:]):
+        body += ("\n" if prev.startswith("\\intertext") else " \\\\\n") + row
+    return (f"\\paragraph{{Contact \\texttt{{{_tex_text(ce.name)}}}}}\n"
+            f"\\begin{{align*}}\n{body}\n\\end{{align*}}\n")
+
+
+def _tex_eq_sorted(eq: sp.Eq) -> str:
+    return f"{vlatex(eq.lhs)} &= {vlatex(eq.rhs)}"

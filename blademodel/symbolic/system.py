@@ -251,6 +251,8 @@ class ContactEquations:
         The model's coordinates and velocities.
     penetration, slip : sympy.Expr
         ``delta = n1 - n2 - gap`` and ``r1 - r2``.
+    k : sympy.Symbol
+        Normal contact stiffness: ``N_c = k delta`` while closed.
     N, Ndot, v, f : sympy.Symbol
         ``N_c``, its rate, the relative slip velocity ``v_c`` and the friction force ``f_c``.
     definitions : dict
@@ -272,6 +274,7 @@ class ContactEquations:
     u: list
     penetration: sp.Expr
     slip: sp.Expr
+    k: sp.Symbol
     N: sp.Symbol
     Ndot: sp.Symbol
     v: sp.Symbol
