@@ -245,7 +245,7 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
     for m in system.modes:
         row = [-1] * max(n_contacts, 1)
         for gi, g in enumerate(m.guards):
-            if g.direction > 0 and g.name.endswith(": close"):
+            if g.kind == "close":
                 row[g.contact] = gi
         close.append(row)
     L.append(f"N_GUARDS = np.array({[len(g) for g in guards]}, dtype=np.int64)")

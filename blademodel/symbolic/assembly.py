@@ -316,10 +316,11 @@ def _guards(asm: _Assembly, mode: Mode, resolve: _Resolver, project=_projection)
     guards = []
     for j, c in enumerate(contacts):
         lm = _law_mode(mode.local, j)
-        for g in _contact_guards(c, lm, ctxs[j], asm.geom[j]["delta"]):
+        for k, g in enumerate(_contact_guards(c, lm, ctxs[j], asm.geom[j]["delta"])):
             expr = subs_f(g.expr, mode.friction_forces[j], j)  # (the penetration has no f: unchanged)
+            kind = "law" if k else ("close" if lm is None else "open")
             guards.append(GuardSpec(expr, g.direction, f"{c.name}: {g.name}", j,
-                                    transitions(j, list(g.candidates))))
+                                    transitions(j, list(g.candidates)), kind))
     return guards
 
 

@@ -23,13 +23,19 @@ class Transition:
 
 @dataclass
 class GuardSpec:
-    """A guard of a mode: expression, crossing direction, candidates in order."""
+    """A guard of a mode: expression, crossing direction, candidates in order.
+
+    ``kind`` says what the guard is, as data: ``"close"`` (an open contact's
+    penetration rising through zero), ``"open"`` (a closed contact's falling
+    through zero) or ``"law"`` (a friction law's own guard); ``name`` is a label.
+    """
 
     expr: sp.Expr
     direction: int
     name: str
     contact: int
     candidates: list[Transition]
+    kind: str = "law"
 
 
 @dataclass
