@@ -30,6 +30,7 @@ from .compiled import _load, cache_dir, law_source_hash
 from .contact_tables import NumericTables, cached_tables
 from . import contract
 from .contract import N_COUNTERS, N_STATS
+from .integrator import Integrator
 
 _MEMO: dict = {}
 
@@ -140,7 +141,7 @@ def n_state_law(tables: NumericTables) -> int:
     return int(tables.n_law)
 
 
-class ContactIntegrator:
+class ContactIntegrator(Integrator):
     """Fixed-step RK4 with located events, every contact holding its own mode.
 
     The counterpart of :class:`~blademodel.numeric.integrator.HybridIntegrator` for
@@ -165,13 +166,7 @@ class ContactIntegrator:
     def __init__(self, model: Model, *, steps_per_period: int = 1000, event_tol: float = 1e-10,
                  max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
                  check_stability: bool = True, max_pivots: int | None = None):
-        from .integrator import check_settings, excitation_period
-        check_settings(steps_per_period, event_tol, max_events_per_step)
-        self.model = model
-        self.period = excitation_period(model) if period is None else float(period)
-        self.steps_per_period = int(steps_per_period)
-        self.event_tol = float(event_tol)
-        self.max_events_per_step = int(max_events_per_step)
+        self._settings(model, steps_per_period, event_tol, max_events_per_step, period)
         self.module, self.kmeta = compile_contact_kernel(model)
         laws, kind = law_kinds(model)
         self.kind = kind
@@ -210,15 +205,6 @@ class ContactIntegrator:
         self._empty_log = (np.empty(0), *(np.empty(0, dtype=np.int64) for _ in range(4)))
 
     # --- modes and states ---------------------------------------------------------------------
-    @property
-    def state_names(self) -> list[str]:
-        return list(self.meta["state"])
-
-    def initial_state(self, y0=None) -> np.ndarray:
-        """State vector from ``y0`` (array or ``{name: value}``); default rest."""
-        from .integrator import state_vector
-        return state_vector(self.meta["state"], self.n_state, y0)
-
     def record_buffer(self, n_records: int) -> tuple:
         """``(t, y, cm)`` arrays for ``n_records`` records (``advance(record=...)``)."""
         return (np.empty(n_records), np.empty((n_records, self.n_state)),

@@ -34,7 +34,7 @@ COUNTER_NAMES = ("steps", "events", "bisections", "rhs_evaluations", "events_log
                  "friction_pivots")
 
 # Float statistics: one float64 array of N_STATS, accumulated across calls.
-S_MAX_CONE_RATIO = 0  #: largest |f| / (slip bound) over sticking rigid-stick contacts at step ends
+S_MAX_CONE_RATIO = 0  #: largest ``|f| / (mu N)`` over sticking rigid-stick contacts at step ends
 N_STATS = 1
 
 #: Names of the float statistics, in index order.

@@ -47,7 +47,34 @@ def state_vector(names: list, n_state: int, y0=None) -> np.ndarray:
     return y
 
 
-class HybridIntegrator:
+class Integrator:
+    """What every kernel's integrator shares: the model, the step settings, the state layout.
+
+    Subclasses set ``meta["state"]`` and ``n_state`` and implement ``mode_of``,
+    ``record_buffer`` and ``advance``.
+    """
+
+    #: Which kernel integrates (``"product"`` or ``"contact"``).
+    kernel = ""
+
+    def _settings(self, model: Model, steps_per_period, event_tol, max_events_per_step, period) -> None:
+        check_settings(steps_per_period, event_tol, max_events_per_step)
+        self.model = model
+        self.period = excitation_period(model) if period is None else float(period)
+        self.steps_per_period = int(steps_per_period)
+        self.event_tol = float(event_tol)
+        self.max_events_per_step = int(max_events_per_step)
+
+    @property
+    def state_names(self) -> list[str]:
+        return list(self.meta["state"])
+
+    def initial_state(self, y0=None) -> np.ndarray:
+        """State vector from ``y0`` (array or ``{name: value}``); default rest."""
+        return state_vector(self.meta["state"], self.n_state, y0)
+
+
+class HybridIntegrator(Integrator):
     """Fixed-step RK4 with located events for one model and one set of settings.
 
     Construction compiles (or loads) the kernel, evaluates the parameter array and
@@ -75,12 +102,7 @@ class HybridIntegrator:
     def __init__(self, model: Model, *, steps_per_period: int = 1000, event_tol: float = 1e-10,
                  max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
                  check_stability: bool = True):
-        check_settings(steps_per_period, event_tol, max_events_per_step)
-        self.model = model
-        self.period = excitation_period(model) if period is None else float(period)
-        self.steps_per_period = int(steps_per_period)
-        self.event_tol = float(event_tol)
-        self.max_events_per_step = int(max_events_per_step)
+        self._settings(model, steps_per_period, event_tol, max_events_per_step, period)
         self.compiled = compile_model(model, energy=energy)
         self.module, self.meta = self.compiled.module, self.compiled.meta
         self.p_raw = np.array([model.parameters[n] for n in self.meta["params"]], dtype=float)
@@ -98,17 +120,11 @@ class HybridIntegrator:
         self._empty_log = (np.empty(0), np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64),
                            np.empty(0, dtype=np.int64))
 
-    @property
-    def state_names(self) -> list[str]:
-        return list(self.meta["state"])
+    kernel = "product"
 
     @property
     def mode_names(self) -> list[str]:
         return list(self.meta["modes"])
-
-    def initial_state(self, y0=None) -> np.ndarray:
-        """State vector from ``y0`` (array or ``{name: value}``); default rest."""
-        return state_vector(self.meta["state"], self.n_state, y0)
 
     def record_buffer(self, n_records: int) -> tuple:
         """``(t, y, mode)`` arrays for ``n_records`` records (``advance(record=...)``)."""

@@ -33,27 +33,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import sympy as sp
-from sympy.printing.pycode import PythonCodePrinter
-
 from ..components.friction.base import STICK, Candidate, ContactContext, FrictionLaw
+from .codegen import _Printer
 
 #: Names of the rigid-stick law modes the friction complementarity problem needs.
 RIGID_STICK_MODES = ("stick", "slip+", "slip-")
-
-
-class _Printer(PythonCodePrinter):
-    def __init__(self, names: dict):
-        super().__init__({"fully_qualified_modules": True, "standard": "python3"})
-        self._names = names
-
-    def _print_Symbol(self, expr):
-        return self._names.get(expr, expr.name)
-
-    def _print_BooleanTrue(self, expr):
-        return "True"
-
-    def _print_BooleanFalse(self, expr):
-        return "False"
 
 
 @dataclass

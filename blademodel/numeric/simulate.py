@@ -101,7 +101,7 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
     integ = make_integrator(model, kernel=kernel, steps_per_period=steps_per_period, event_tol=event_tol,
                             max_events_per_step=max_events_per_step, energy=energy, period=period,
                             check_stability=check_stability)
-    per_contact = getattr(integ, "kernel", "product") == "contact"
+    per_contact = integ.kernel == "contact"
     T, n, meta = integ.period, integ.n_state, integ.meta
     y = integ.initial_state(y0)
     if mode0 is None:

@@ -83,7 +83,7 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
         rec = integ.record_buffer(n_rec)
         poinc = np.empty((periods, integ.n_state))
         counters = np.zeros(N_COUNTERS, dtype=np.int64)
-        per_contact = getattr(integ, "kernel", "product") == "contact"
+        per_contact = integ.kernel == "contact"
         stats = np.zeros(N_STATS)
         extra = {"stats": stats} if per_contact else {}
         status, mode, t = integ.advance(y, mode, 0, transient, counters=counters, **extra)

@@ -20,7 +20,8 @@ import numpy as np
 
 from .. import __version__
 
-#: ``max_cone_ratio``: the largest |f| / (mu N) of a sticking Coulomb contact (per-contact kernel; NaN otherwise).
+#: Per-point scalars. ``max_cone_ratio``: the largest ``|f| / (mu N)`` of a sticking
+#: Coulomb contact (per-contact kernel; NaN for the product kernel).
 SCALARS = ("length_scale", "period", "motion", "lyapunov", "P", "P0", "Pd", "events", "max_cone_ratio")
 INTS = ("period", "motion", "events")
 LAW_CHARS, ERROR_CHARS = 32, 400
