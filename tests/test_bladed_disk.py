@@ -89,11 +89,12 @@ def test_disk_without_contact_is_the_exact_linear_forced_response():
 
 @pytest.mark.parametrize("law", ["coulomb", "bilinear"])
 def test_disk_energy_balance(law):
-    cfg = _disk(blades=8, engine_order=1, friction=law)
+    cfg = _disk(friction=law)            # the tuned 24-blade ring, engine order 3
     model = cfg.build()
-    r = simulate(model, transient=10, periods=10, steps_per_period=4000, energy=True, event_tol=1e-12)
+    r = simulate(model, transient=10, periods=5, steps_per_period=4000, energy=True, event_tol=1e-12,
+                 record_every=40)
     bal = energy_balance(model, r)
-    assert r.counters["events"] > 50 and bal["D_fric"] > 0
+    assert r.counters["events"] > 1000 and bal["D_fric"] > 0
     assert abs(bal["residual"]) < 1e-8 * bal["throughput"]
 
 

@@ -56,20 +56,25 @@ _CODE_VERSION: list[str] = []
 
 
 def _code_version() -> str:
-    """Hash of the sources that shape generated code, so edits invalidate the cache.
+    """Hash of the sources that shape generated code and of the library versions, so edits invalidate the cache.
 
     The files are read, not imported: a process that finds its kernel in the cache
     never imports the symbolic layer or the code generator (start-up time).
     """
     if _CODE_VERSION:
         return _CODE_VERSION[0]
-    from ..components import friction as friction_pkg
+    import platform
+
+    import numba
     here = Path(__file__).resolve().parent
     h = hashlib.sha256()
-    for path in (here.parent / "symbolic" / "assembly.py", here / "codegen.py", here / "loop.py"):
+    for path in (here / "codegen.py", here / "loop.py", here / "jacobian.py", here / "contract.py"):
         h.update(path.read_text(encoding="utf-8").encode())
-    for path in sorted(Path(friction_pkg.__file__).parent.glob("*.py")):
-        h.update(path.read_bytes())
+    # every component and the symbolic layer shape the equations: an edited one regenerates
+    for folder in (here.parent / "symbolic", here.parent / "components", here.parent / "components" / "friction"):
+        for path in sorted(folder.glob("*.py")):
+            h.update(path.read_bytes())
+    h.update(f"{platform.python_version()}|{np.__version__}|{numba.__version__}".encode())
     _CODE_VERSION.append(h.hexdigest()[:12])
     return _CODE_VERSION[0]
 
