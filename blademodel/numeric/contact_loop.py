@@ -381,6 +381,53 @@ def first_crossing(cm, I, WI, G0, G1, use_fired):
     return -1
 
 
+def locate_trial(t, y, dt, frac, cm, I, R, WI, WF, SC, ymid, G0, Gm, counters):
+    """RK4 sub-step to the fraction ``frac`` of the step and its guards; the first crossing since the start."""
+    rk4_step(t, y, frac * dt, cm, I, R, WI, WF, SC, ymid)
+    eval_guards(t + frac * dt, ymid, cm, I, R, WI, WF, Gm)
+    counters[C_BISECTIONS] += 1
+    counters[C_RHS] += 4
+    return first_crossing(cm, I, WI, G0, Gm, False)
+
+
+def copy_bracket_end(y1, ymid, G1, Gm):
+    """The trial point becomes the bracket's far end."""
+    for i in range(y1.shape[0]):
+        y1[i] = ymid[i]
+    for j in range(G1.shape[0]):
+        for gi in range(G1.shape[1]):
+            G1[j, gi] = Gm[j, gi]
+
+
+def first_near_crossing(cm, I, WI, Gs, G1, span, tol):
+    """``j * GMAX + gi`` of the first guard of a contact not yet fired that will cross within ``tol``.
+
+    ``Gs`` and ``G1`` are the guards at the sub-step start and at the event, ``span``
+    apart in time. A guard moving toward its crossing whose root, extrapolated
+    linearly, lies within the event tolerance ``tol`` after the event is
+    simultaneous with it (the two roots are not told apart by the location), so it
+    fires now; otherwise roots equal but for round-off, as in a symmetric ring, could
+    split into two events in either order.
+    """
+    if span <= 0.0:
+        return -1
+    nc = I[H_NC]
+    claw, fired = vec(I, I, O_CLAW, nc), wvec(WI, nc, 5)
+    for j in range(nc):
+        if fired[j] != 0:
+            continue
+        K = claw[j]
+        m = cm[j]
+        for gi in range(NG[K, m]):  # noqa: F821
+            d = GDIR[K, m, gi]  # noqa: F821
+            gs = Gs[j, gi]
+            ge = G1[j, gi]
+            toward = (d <= 0 and 0.0 <= ge < gs) or (d >= 0 and gs < ge <= 0.0)
+            if toward and abs(ge) * span <= abs(ge - gs) * tol:
+                return j * GMAX + gi  # noqa: F821
+    return -1
+
+
 def cone_ratio(y, I, R, WI, WF):
     """Largest ``|f| / bound`` over the sticking rigid contacts (after ``contact_forces``)."""
     ns, nc = WI[0], I[H_NC]
@@ -642,23 +689,54 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                     if WI[0] > 0:
                         stats[S_MAX_CONE_RATIO] = max(stats[S_MAX_CONE_RATIO], cone_ratio(y, I, R, WI, WF))
                     break
+                # Bracket the earliest crossing on the RK4 sub-step map: Illinois steps on the
+                # guard that crossed first, every third step a bisection, the bracket kept by
+                # first_crossing; then the far end is set exactly one tolerance past the near
+                # end, so the state lies past the root by at most the tolerance.
                 lo = 0.0
                 hi = 1.0
-                while (hi - lo) * dt > event_tol * h:
+                code = first_crossing(cm, I, WI, G0, G1, False)
+                jt = code // GMAX  # noqa: F821
+                gt = code - jt * GMAX  # noqa: F821
+                glo = G0[jt, gt]
+                ghi = G1[jt, gt]
+                side = 0
+                k = 0
+                width = event_tol * h / dt
+                while hi - lo > width:
                     mid = 0.5 * (lo + hi)
-                    rk4_step(t, y, mid * dt, cm, I, R, WI, WF, SC, ymid)
-                    eval_guards(t + mid * dt, ymid, cm, I, R, WI, WF, Gm)
-                    counters[C_BISECTIONS] += 1
-                    counters[C_RHS] += 4
-                    if first_crossing(cm, I, WI, G0, Gm, False) >= 0:
+                    if k % 3 != 2 and glo != ghi:
+                        frac = glo / (glo - ghi)
+                        if 0.0 < frac < 1.0:
+                            mid = lo + frac * (hi - lo)
+                    if not (lo < mid < hi):
+                        mid = 0.5 * (lo + hi)
+                    k += 1
+                    c = locate_trial(t, y, dt, mid, cm, I, R, WI, WF, SC, ymid, G0, Gm, counters)
+                    if c >= 0:
                         hi = mid
-                        for i in range(n):
-                            y1[i] = ymid[i]
-                        for j in range(nc):
-                            for gi in range(GMAX):  # noqa: F821
-                                G1[j, gi] = Gm[j, gi]
+                        copy_bracket_end(y1, ymid, G1, Gm)
+                        if c != code:
+                            code = c
+                            jt = code // GMAX  # noqa: F821
+                            gt = code - jt * GMAX  # noqa: F821
+                            glo = G0[jt, gt]
+                            side = 0
+                        elif side == 1:
+                            glo *= 0.5
+                        ghi = Gm[jt, gt]
+                        side = 1
                     else:
                         lo = mid
+                        if side == -1:
+                            ghi *= 0.5
+                        glo = Gm[jt, gt]
+                        side = -1
+                hi2 = min(lo + width, 1.0)
+                if hi < 1.0 and hi2 != hi:
+                    if locate_trial(t, y, dt, hi2, cm, I, R, WI, WF, SC, ymid, G0, Gm, counters) >= 0:
+                        hi = hi2
+                        copy_bracket_end(y1, ymid, G1, Gm)
                 code = first_crossing(cm, I, WI, G0, G1, False)
                 t_sub = t
                 for i in range(n):
@@ -681,6 +759,8 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                     eval_guards(t_sub, ysub, cm, I, R, WI, WF, Gs)
                     eval_guards(t, y, cm, I, R, WI, WF, G1)
                     code = first_crossing(cm, I, WI, Gs, G1, True)
+                    if code < 0:
+                        code = first_near_crossing(cm, I, WI, Gs, G1, t - t_sub, event_tol * h)
                 if not settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log_g,
                                     log_from, log_to, recording):
                     counters[C_RECORDS] = irec
