@@ -52,6 +52,32 @@ def law_source_hash(laws) -> str:
     return h.hexdigest()[:8]
 
 
+PACKAGE = Path(__file__).resolve().parent.parent
+
+
+def library_versions() -> str:
+    """The Python, NumPy and Numba versions: compiled code is only valid for these."""
+    import platform
+
+    import numba
+    return f"{platform.python_version()}|{np.__version__}|{numba.__version__}"
+
+
+def hash_sources(paths, *extra: str) -> str:
+    """Hash of the files ``paths`` (read, not imported) and the strings ``extra``."""
+    h = hashlib.sha256()
+    for path in paths:
+        h.update(Path(path).read_bytes())
+    for text in extra:
+        h.update(text.encode())
+    return h.hexdigest()[:12]
+
+
+def package_sources(*folders: str) -> list[Path]:
+    """The ``.py`` files of the package's ``folders`` (relative to ``blademodel/``), sorted."""
+    return [p for f in folders for p in sorted((PACKAGE / f).glob("*.py"))]
+
+
 _CODE_VERSION: list[str] = []
 
 
@@ -59,23 +85,14 @@ def _code_version() -> str:
     """Hash of the sources that shape generated code and of the library versions, so edits invalidate the cache.
 
     The files are read, not imported: a process that finds its kernel in the cache
-    never imports the symbolic layer or the code generator (start-up time).
+    never imports the symbolic layer or the code generator (start-up time). Every
+    component and the symbolic layer shape the equations, so an edited one regenerates.
     """
-    if _CODE_VERSION:
-        return _CODE_VERSION[0]
-    import platform
-
-    import numba
-    here = Path(__file__).resolve().parent
-    h = hashlib.sha256()
-    for path in (here / "codegen.py", here / "loop.py", here / "jacobian.py", here / "contract.py"):
-        h.update(path.read_text(encoding="utf-8").encode())
-    # every component and the symbolic layer shape the equations: an edited one regenerates
-    for folder in (here.parent / "symbolic", here.parent / "components", here.parent / "components" / "friction"):
-        for path in sorted(folder.glob("*.py")):
-            h.update(path.read_bytes())
-    h.update(f"{platform.python_version()}|{np.__version__}|{numba.__version__}".encode())
-    _CODE_VERSION.append(h.hexdigest()[:12])
+    if not _CODE_VERSION:
+        here = PACKAGE / "numeric"
+        files = [here / "codegen.py", here / "loop.py", here / "jacobian.py", here / "contract.py",
+                 *package_sources("symbolic", "components", "components/friction")]
+        _CODE_VERSION.append(hash_sources(files, library_versions()))
     return _CODE_VERSION[0]
 
 

@@ -20,13 +20,11 @@ import hashlib
 import json
 import math
 import os
-import platform
-from pathlib import Path
 
 import numpy as np
 
 from ..model import Model
-from .compiled import _load, cache_dir, law_source_hash
+from .compiled import PACKAGE, _load, cache_dir, hash_sources, law_source_hash, library_versions, package_sources
 from .contact_tables import NumericTables, cached_tables
 from . import contract
 from .contract import N_COUNTERS, N_STATS
@@ -36,40 +34,35 @@ _MEMO: dict = {}
 
 
 def _code_version() -> str:
-    here = Path(__file__).resolve().parent
-    h = hashlib.sha256()
-    for name in ("contact_loop.py", "contact_codegen.py", "law_codegen.py", "contract.py"):
-        h.update((here / name).read_bytes())
-    from ..components import friction as friction_pkg
-    for path in sorted(Path(friction_pkg.__file__).parent.glob("*.py")):
-        h.update(path.read_bytes())
-    return h.hexdigest()[:12]
-
-
-def _versions() -> str:
-    import numba
-    return f"{platform.python_version()}|{np.__version__}|{numba.__version__}"
+    """Hash of the template, the generators, the contract and the package's friction laws."""
+    here = PACKAGE / "numeric"
+    return hash_sources([here / n for n in ("contact_loop.py", "contact_codegen.py", "law_codegen.py", "contract.py")]
+                        + package_sources("components/friction"))
 
 
 def _module_name(source: str) -> str:
     """File name of a generated module: the hash of its text and of the library versions."""
-    return f"ck_{hashlib.sha256((source + _versions()).encode()).hexdigest()[:20]}.py"
+    return f"ck_{hashlib.sha256((source + library_versions()).encode()).hexdigest()[:20]}.py"
+
+
+def _law_key(law) -> str:
+    return json.dumps([str(x) for x in law.structure()])
 
 
 def law_kinds(model: Model) -> tuple[list, list[int]]:
     """One law instance per distinct :meth:`structure` (sorted), and each contact's kind."""
+    keys = [_law_key(c.friction) for c in model.contacts]
     by_key: dict = {}
-    for c in model.contacts:
-        by_key.setdefault(json.dumps([str(x) for x in c.friction.structure()]), c.friction)
-    keys = sorted(by_key)
-    kind = [keys.index(json.dumps([str(x) for x in c.friction.structure()])) for c in model.contacts]
-    return [by_key[k] for k in keys], kind
+    for key, c in zip(keys, model.contacts):
+        by_key.setdefault(key, c.friction)
+    order = sorted(by_key)
+    return [by_key[k] for k in order], [order.index(k) for k in keys]
 
 
 def compile_contact_kernel(model: Model):
     """The compiled per-contact module for the law kinds of ``model`` and its metadata."""
     laws, _ = law_kinds(model)
-    kinds_key = json.dumps([[str(x) for x in law.structure()] for law in laws])
+    kinds_key = json.dumps([_law_key(law) for law in laws])
     key = hashlib.sha256(f"{kinds_key}|{law_source_hash(laws)}|{_code_version()}".encode()).hexdigest()[:16]
     if key in _MEMO:
         return _MEMO[key]
@@ -110,7 +103,7 @@ def pack_tables(tables: NumericTables, n_state: int) -> tuple[np.ndarray, np.nda
     header = np.zeros(contract.H_SIZE, dtype=np.int64)
     header[contract.H_N], header[contract.H_NC], header[contract.H_NF] = n, nc, len(fi)
     header[contract.H_NG], header[contract.H_LPW] = len(om), tables.LP.shape[1]
-    header[contract.H_NLAW] = n_state_law(tables)
+    header[contract.H_NLAW] = tables.n_law
 
     def pack(parts, keys, dtype, start):
         chunks, pos = [], start
@@ -135,10 +128,6 @@ def pack_tables(tables: NumericTables, n_state: int) -> tuple[np.ndarray, np.nda
     I = np.concatenate([header, ints])
     WI = np.zeros(2 + 6 * m, dtype=np.int64)
     return I, R, WI, WF
-
-
-def n_state_law(tables: NumericTables) -> int:
-    return int(tables.n_law)
 
 
 class ContactIntegrator(Integrator):
@@ -183,8 +172,7 @@ class ContactIntegrator(Integrator):
         self.n_state = self.n_physical + (3 if energy else 0)
         self.energy = energy
         self.param_names = list(model.parameters)
-        self.tables = NumericTables(cached_tables(model), model.parameters, kind, offsets, self.param_names)
-        self.tables.n_law = pos
+        self.tables = NumericTables(cached_tables(model), model.parameters, kind, offsets, self.param_names, pos)
         self.meta = {"state": [*coords, *(f"v{c}" for c in coords), *names]
                      + (["W_in", "D_visc", "D_fric"] if energy else []),
                      "coordinates": coords, "params": self.param_names, "energy": energy,
@@ -202,7 +190,7 @@ class ContactIntegrator(Integrator):
             from .stability import check_step
             h_max, which = self.max_stable_step()
             check_step(self.period, self.steps_per_period, h_max, which)
-        self._empty_log = (np.empty(0), *(np.empty(0, dtype=np.int64) for _ in range(4)))
+        self._empty_log = self.log_buffer(0)
 
     # --- modes and states ---------------------------------------------------------------------
     def record_buffer(self, n_records: int) -> tuple:
@@ -215,7 +203,7 @@ class ContactIntegrator(Integrator):
 
         May apply entry resets and the stick projection to ``y``, in place.
         """
-        cm = np.zeros(max(self.nc, 0), dtype=np.int64)
+        cm = np.zeros(self.nc, dtype=np.int64)
         counters = np.zeros(N_COUNTERS, dtype=np.int64)
         if self.nc:
             ok = self.module.initial_modes(float(t), y, cm, self.I, self.R, self.WI, self.WF, self.GS[0], counters,
@@ -223,6 +211,38 @@ class ContactIntegrator(Integrator):
             if not ok:
                 raise RuntimeError("the friction problem of the initial state was not resolved")
         return cm
+
+    def log_buffer(self, n: int) -> tuple:
+        """``(t, contact, guard, from, to)`` arrays for an event log of ``n`` entries."""
+        return (np.empty(n), *(np.empty(n, dtype=np.int64) for _ in range(4)))
+
+    def named_events(self, log: tuple, n: int) -> dict:
+        """The first ``n`` log entries by name: ``t``, ``contact``, ``guard`` and its ``from``/``to`` modes.
+
+        A mode set by the friction problem has the guard ``"<contact>: friction problem"``.
+        """
+        names, cmodes, cguards = self.meta["contacts"], self.meta["contact_modes"], self.meta["contact_guards"]
+        log_t, log_c, log_g, log_f, log_to = log
+        one = len(names) == 1
+
+        def local(j, m):
+            return cmodes[j][m] if one else f"{names[j]}={cmodes[j][m]}"
+        return {"t": log_t[:n].copy(),
+                "contact": [names[j] for j in log_c[:n]],
+                "guard": [f"{names[j]}: " + (cguards[j][f][g] if g >= 0 else "friction problem")
+                          for j, g, f in zip(log_c[:n], log_g[:n], log_f[:n])],
+                "from": [local(j, m) for j, m in zip(log_c[:n], log_f[:n])],
+                "to": [local(j, m) for j, m in zip(log_c[:n], log_to[:n])]}
+
+    def mode_table(self, rec_cm: np.ndarray, final_cm) -> tuple[list, np.ndarray, int]:
+        """Names of the mode combinations met, the records as indices into them, the final one's index."""
+        combos = [tuple(int(x) for x in row) for row in rec_cm]
+        final = tuple(int(x) for x in final_cm)
+        index: dict = {}
+        for c in [*combos, final]:
+            index.setdefault(c, len(index))
+        return ([self.mode_label(c) for c in index], np.array([index[c] for c in combos], dtype=np.int64),
+                index[final])
 
     def mode_label(self, cm) -> str:
         """``"c1=stick,c2=open"`` (the law mode's name alone for one contact; ``"free"`` for none)."""

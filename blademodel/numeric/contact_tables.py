@@ -13,7 +13,6 @@ the number of components; nothing is compiled per model.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import os
@@ -28,13 +27,9 @@ _NAMESPACE = {"sin": math.sin, "cos": math.cos, "tan": math.tan, "sqrt": math.sq
 
 
 def _components_version() -> str:
-    """Hash of the component sources: an edited component re-derives the tables."""
-    here = Path(__file__).resolve().parent.parent / "components"
-    h = hashlib.sha256()
-    for path in sorted(here.glob("*.py")):
-        h.update(path.read_bytes())
-    h.update(Path(__file__).read_bytes())
-    return h.hexdigest()[:12]
+    """Hash of the component sources and of this file: an edited component re-derives the tables."""
+    from .compiled import hash_sources, package_sources
+    return hash_sources([*package_sources("components"), Path(__file__)])
 
 
 def derive_tables(model: Model) -> dict:
@@ -162,11 +157,13 @@ class NumericTables:
         Law kind of each contact in the generated module.
     state_offset : sequence of int
         Offset of each contact's law states after ``q`` and ``u``.
+    n_law : int
+        Number of law states in all.
     param_order : list of str
         Parameter names in ``p`` order.
     """
 
-    def __init__(self, tables: dict, values: dict, law_kind, state_offset, param_order):
+    def __init__(self, tables: dict, values: dict, law_kind, state_offset, param_order, n_law: int):
         ns = {**_NAMESPACE, **values}
         ev = _Evaluator(ns)
         n = len(tables["coordinates"])
@@ -212,7 +209,7 @@ class NumericTables:
         self.claw = np.array(law_kind, dtype=np.int64)
         self.cso = np.array(state_offset, dtype=np.int64)
         self.p = np.array([values[name] for name in param_order], dtype=float)
-        self.n_law = 0  # set by the integrator: law states in all
+        self.n_law = int(n_law)
 
     def stiffness_matrix(self) -> np.ndarray:
         """Dense ``K`` of the springs (for energies and checks)."""

@@ -130,6 +130,23 @@ class HybridIntegrator(Integrator):
         """``(t, y, mode)`` arrays for ``n_records`` records (``advance(record=...)``)."""
         return np.empty(n_records), np.empty((n_records, self.n_state)), np.empty(n_records, dtype=np.int64)
 
+    def log_buffer(self, n: int) -> tuple:
+        """``(t, guard, from, to)`` arrays for an event log of ``n`` entries (``advance(log=...)``)."""
+        return (np.empty(n), *(np.empty(n, dtype=np.int64) for _ in range(3)))
+
+    def named_events(self, log: tuple, n: int) -> dict:
+        """The first ``n`` entries of ``log`` by name: ``t``, ``guard``, ``from`` and ``to`` modes."""
+        modes, guards = self.meta["modes"], self.meta["guards"]
+        log_t, log_guard, log_from, log_to = log
+        return {"t": log_t[:n].copy(),
+                "guard": [guards[f][gi] for f, gi in zip(log_from[:n], log_guard[:n])],
+                "from": [modes[i] for i in log_from[:n]],
+                "to": [modes[i] for i in log_to[:n]]}
+
+    def mode_table(self, rec_mode: np.ndarray, final_mode) -> tuple[list, np.ndarray, int]:
+        """Mode names, the recorded modes as indices into them, and the final mode's index."""
+        return list(self.meta["modes"]), rec_mode, int(final_mode)
+
     def mode_of(self, y: np.ndarray, t: float = 0.0) -> int:
         """The mode a state belongs to (closed contacts where ``delta >= 0``).
 

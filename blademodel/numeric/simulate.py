@@ -3,40 +3,16 @@
 from __future__ import annotations
 
 
-import numpy as np
-
 import warnings
+
+import numpy as np
 
 from ..model import Model
 from .contract import (C_LOGGED, C_RECORDS, COUNTER_NAMES, N_COUNTERS, N_STATS, S_MAX_CONE_RATIO, STAT_NAMES,
-                       STATUS_EVENT_STORM, STATUS_FRICTION_UNRESOLVED, STATUS_NAMES, STATUS_NONFINITE, STATUS_OK)
+                       STATUS_EVENT_STORM, STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE, STATUS_OK)
 from .integrator import HybridIntegrator, excitation_period  # noqa: F401  (re-exported)
 from .kernels import make_integrator
 from .result import SimulationError, SimulationResult
-
-
-def _contact_labels(integ, rec_cm, final_cm, log, nl):
-    """Mode names of the combinations met, record mode indices, the event log by name."""
-    combos = [tuple(int(x) for x in row) for row in rec_cm]
-    final = tuple(int(x) for x in final_cm)
-    index: dict = {}
-    for c in [*combos, final]:
-        index.setdefault(c, len(index))
-    labels = [integ.mode_label(c) for c in index]
-    mode_idx = np.array([index[c] for c in combos], dtype=np.int64)
-    names, cmodes, cguards = integ.meta["contacts"], integ.meta["contact_modes"], integ.meta["contact_guards"]
-    log_t, log_c, log_g, log_f, log_to = log
-    one = len(names) == 1
-
-    def local(j, m):
-        return cmodes[j][m] if one else f"{names[j]}={cmodes[j][m]}"
-    events = {"t": log_t[:nl].copy(),
-              "contact": [names[j] for j in log_c[:nl]],
-              "guard": [f"{names[j]}: " + (cguards[j][f][g] if g >= 0 else "friction problem")
-                        for j, g, f in zip(log_c[:nl], log_g[:nl], log_f[:nl])],
-              "from": [local(j, m) for j, m in zip(log_c[:nl], log_f[:nl])],
-              "to": [local(j, m) for j, m in zip(log_c[:nl], log_to[:nl])]}
-    return labels, events, mode_idx, index[final]
 
 
 def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_period: int = 1000,
@@ -116,7 +92,7 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
     rec_mode = np.empty((n_rec, nc), dtype=np.int8) if per_contact else np.empty(n_rec, dtype=np.int64)
     forces = (np.empty((n_rec, nc)), np.empty((n_rec, nc))) if per_contact and record_forces else None
     poincare = np.empty((periods, n))
-    log = (np.empty(max_log), *(np.empty(max_log, dtype=np.int64) for _ in range(4 if per_contact else 3)))
+    log = integ.log_buffer(max_log)
     counters = np.zeros(N_COUNTERS, dtype=np.int64)
     stats = np.zeros(N_STATS)
     extra = {"forces": forces, "stats": stats} if per_contact else {}
@@ -133,29 +109,22 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
             progress(start, total)
     nr = int(counters[C_RECORDS])
     nl = min(int(counters[C_LOGGED]), max_log)
+    events = integ.named_events(log, nl)
+    labels, mode_idx, final_idx = integ.mode_table(rec_mode[:nr], mode)
+    mode_label = labels[final_idx]
+    contact = None
     if per_contact:
-        labels, events, mode_idx, final_idx = _contact_labels(integ, rec_mode[:nr], mode, log, nl)
         contact = {"names": list(meta["contacts"]), "modes": rec_mode[:nr],
                    "mode_names": [list(m) for m in meta["contact_modes"]]}
         if forces is not None:
             contact.update(N=forces[0][:nr], f=forces[1][:nr])
-        mode_label = labels[final_idx]
-    else:
-        modes, guards = meta["modes"], meta["guards"]
-        log_t, log_guard, log_from, log_to = log
-        events = {"t": log_t[:nl].copy(),
-                  "guard": [guards[f][gi] for f, gi in zip(log_from[:nl], log_guard[:nl])],
-                  "from": [modes[i] for i in log_from[:nl]],
-                  "to": [modes[i] for i in log_to[:nl]]}
-        labels, mode_idx, final_idx, contact = list(modes), rec_mode[:nr], int(mode), None
-        mode_label = modes[int(mode)]
     n_poinc = periods if status == 0 else max(0, int(t_stop / T) - transient)
     where = f"at t = {t_stop:.6g} s in mode '{mode_label}'"
     message = {STATUS_OK: "done",
                STATUS_NONFINITE: f"the state became non-finite {where}",
                STATUS_EVENT_STORM: f"event storm: more than {max_events_per_step} events in one step {where}",
                STATUS_FRICTION_UNRESOLVED: f"the friction problem of an event was not resolved {where}"
-               }.get(int(status), f"{STATUS_NAMES.get(int(status), 'failure')} {where}")
+               }[int(status)]
     counter_dict = dict(zip(COUNTER_NAMES, map(int, counters)))
     if per_contact:
         counter_dict.update(dict(zip(STAT_NAMES, map(float, stats))))
@@ -171,7 +140,7 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
         status=int(status), message=message, length_scale=length_scale,
         settings={"periods": periods, "transient": transient, "steps_per_period": steps_per_period,
                   "event_tol": event_tol, "record_every": record_every,
-                  "kernel": "contact" if per_contact else "product"},
+                  "kernel": integ.kernel},
         contacts=contact, final_contact_modes=np.asarray(mode).copy() if per_contact else None)
     if status != 0 and raise_on_error:
         raise SimulationError(message, result)

@@ -71,7 +71,46 @@ class Mode:
 
 
 @dataclass
-class HybridSystem:
+class SymbolicModel:
+    """The symbols every derived system of a model shares (base of :class:`HybridSystem`, :class:`ModeSystem`).
+
+    Attributes
+    ----------
+    model : Model
+    t : sympy.Symbol
+    q, u : list of sympy.Symbol
+        Coordinates and their velocities (``x1`` and ``vx1``).
+    s : list of sympy.Symbol
+        Internal states of the friction laws.
+    params : list of sympy.Symbol
+        Parameters in the order of ``model.parameters``.
+    mass_matrix : sympy.Matrix
+    normal_symbols, friction_symbols : list of sympy.Symbol
+        ``N_c``, ``f_c`` per contact (display only).
+    """
+
+    model: object
+    t: sp.Symbol
+    q: list
+    u: list
+    s: list
+    params: list
+    mass_matrix: sp.Matrix
+    normal_symbols: list
+    friction_symbols: list
+
+    @property
+    def state(self) -> list:
+        """State symbols in state-vector order: ``q``, ``u``, ``s``."""
+        return [*self.q, *self.u, *self.s]
+
+    @property
+    def state_names(self) -> list[str]:
+        return [x.name for x in self.state]
+
+
+@dataclass
+class HybridSystem(SymbolicModel):
     """Symbolic hybrid system derived from a :class:`~blademodel.model.Model`.
 
     Attributes
@@ -95,28 +134,10 @@ class HybridSystem:
         Index of the mode with every contact open.
     """
 
-    model: object
-    t: sp.Symbol
-    q: list
-    u: list
-    s: list
-    params: list
-    mass_matrix: sp.Matrix
     generalized_forces: dict
-    normal_symbols: list
-    friction_symbols: list
     modes: list
     open_mode: int
     energy: dict
-
-    @property
-    def state(self) -> list:
-        """State symbols in state-vector order: ``q``, ``u``, ``s``."""
-        return [*self.q, *self.u, *self.s]
-
-    @property
-    def state_names(self) -> list[str]:
-        return [x.name for x in self.state]
 
     def mode_index(self, name: str) -> int:
         for i, m in enumerate(self.modes):
@@ -129,7 +150,7 @@ class HybridSystem:
 
 
 @dataclass
-class ModeSystem:
+class ModeSystem(SymbolicModel):
     """One mode of a model, derived alone by :func:`~blademodel.symbolic.assembly.derive_mode`.
 
     Reads like a :class:`HybridSystem` holding one mode (``modes``, ``mode_index()``,
@@ -154,15 +175,6 @@ class ModeSystem:
     contact_names : list of str
     """
 
-    model: object
-    t: sp.Symbol
-    q: list
-    u: list
-    s: list
-    params: list
-    mass_matrix: sp.Matrix
-    normal_symbols: list
-    friction_symbols: list
     mode: Mode
     forces: dict
     targets: list
@@ -175,11 +187,6 @@ class ModeSystem:
     @property
     def generalized_forces(self) -> dict:
         return {self.mode.name: self.forces}
-
-    @property
-    def state(self) -> list:
-        """State symbols in state-vector order: ``q``, ``u``, ``s``."""
-        return [*self.q, *self.u, *self.s]
 
     @property
     def assignment(self) -> dict:
