@@ -26,8 +26,10 @@ _ENTRY_POINTS = ("integrate", "initial_modes", "rhs", "factor_stick", "contact_f
 _VIEWS = ("vec", "mat", "wvec", "law_offset")
 
 _TEMPLATE_FUNCTIONS = ("vec", "mat", "wvec", "law_offset", "record", "factor_stick", "back_substitute", "solve_stick", "slip_bound", "least_cone_ratio",
-                       "contact_forces", "rhs", "rk4_step", "eval_guards", "crossed", "first_crossing",
-                       "cone_ratio", "first_near_crossing", "locate_trial", "copy_bracket_end", "apply_transition", "project_onto_stick", "resolve_friction",
+                       "contact_forces", "rates", "rhs", "rhs_guards", "rk4_step", "guards_of_forces", "eval_guards",
+                       "crossed", "first_crossing", "cone_ratio", "first_near_crossing", "guard_rates",
+                       "locate_trial", "copy_guards", "hermite", "hermite_root", "predicted_root",
+                       "earliest_crossing", "locate_event", "apply_transition", "project_onto_stick", "resolve_friction",
                        "rigid_problem", "log_event", "settle_event", "initial_modes", "integrate")
 
 # Every function is compiled without Numba's reference counting (``_nrt=False``):

@@ -116,17 +116,25 @@ def pack_tables(tables: NumericTables, n_state: int) -> tuple[np.ndarray, np.nda
                 chunks.append(np.zeros(1, dtype=dtype))
         return np.concatenate(chunks) if chunks else np.zeros(0, dtype=dtype)
 
-    ints = pack([Kp, Ki, Cp, Ci, fi, fg, tables.cidx, tables.claw, tables.cso, tables.LP],
-                range(contract.O_KP, contract.O_LP + 1), np.int64, contract.H_SIZE)
+    # contacts coupled through W (sharing a moved coordinate), per contact in ascending order (CSR)
+    W = np.asarray(tables.W, dtype=float).reshape(nc, nc) if nc else np.zeros((0, 0))
+    Wp, Wi = [0], []
+    for j in range(nc):
+        Wi += [k for k in range(nc) if k != j and W[j, k] != 0.0]
+        Wp.append(len(Wi))
+    ints = pack([Kp, Ki, Cp, Ci, fi, fg, tables.cidx, tables.claw, tables.cso, tables.LP, Wp, Wi],
+                range(contract.O_KP, contract.O_WI + 1), np.int64, contract.H_SIZE)
     R = pack([tables.invm, Kv, Cv, fs, fc, om, tables.cgn, tables.cgr, tables.cgap, tables.ck, tables.p, tables.W],
              range(contract.R_INVM, contract.R_W + 1), np.float64, 0)
-    sizes = [n] + [m] * 9 + [contract.MAX_GROUPS, contract.MAX_GROUPS, contract.MAX_LAW_STATES, n_state, m * m]
+    sizes = [n] + [m] * 9 + [contract.MAX_GROUPS, contract.MAX_GROUPS, contract.MAX_LAW_STATES, n_state, m * m,
+                             m, 1]
     WF = pack([np.zeros(k) for k in sizes],
               [contract.F_F, contract.F_N, contract.F_ND, contract.F_V, contract.F_FR, contract.F_DL, contract.F_X,
                contract.F_D, contract.F_NULL, contract.F_B, contract.F_SG, contract.F_CG, contract.F_Z,
-               contract.F_YEV, contract.F_L], np.float64, 0)
+               contract.F_YEV, contract.F_L, contract.F_DR, contract.F_T], np.float64, 0)
+    WF[header[contract.F_T]] = math.nan   # the time of the forcing's sin and cos in F_SG, F_CG: none yet
     I = np.concatenate([header, ints])
-    WI = np.zeros(2 + 6 * m, dtype=np.int64)
+    WI = np.zeros(2 + 7 * m, dtype=np.int64)
     return I, R, WI, WF
 
 
@@ -182,8 +190,8 @@ class ContactIntegrator(Integrator):
         self.nc = len(model.contacts)
         self.max_pivots = int(max_pivots) if max_pivots is not None else 4 * self.nc + 20
         self.I, self.R, self.WI, self.WF = pack_tables(self.tables, self.n_state)
-        self.SC = np.zeros((8, self.n_state))
-        self.GS = np.zeros((4, max(self.nc, 1), self.kmeta["gmax"]))
+        self.SC = np.zeros((9, self.n_state))
+        self.GS = np.zeros((9, max(self.nc, 1), self.kmeta["gmax"]))
         if max([len(k["states"]) for k in self.kmeta["kinds"]] + [0]) > contract.MAX_LAW_STATES:
             raise ValueError(f"a friction law has more than {contract.MAX_LAW_STATES} states")
         if check_stability:

@@ -18,7 +18,8 @@ needs (no copies; every function is compiled without reference counting, see
 ``I``: ``Kp, Ki`` (stiffness, CSR rows), ``Cp, Ci`` (damping, CSR), ``fi, fg``
 (forcing entries: coordinate, frequency group), ``cidx`` (contact slots, ``(nc, 4)``,
 -1 unused), ``claw`` (law kind), ``cso`` (offset of the law's states after ``q`` and
-``u``), ``LP`` (the law's parameter indices into ``p``, ``(nc, LPW)``).
+``u``), ``LP`` (the law's parameter indices into ``p``, ``(nc, LPW)``), ``Wp, Wi``
+(the contacts coupled to each contact through ``W``, CSR).
 
 ``R``: ``invm`` (inverse masses), ``Kv``, ``Cv`` (CSR values), ``fs, fc`` (forcing
 ``fs sin(w t) + fc cos(w t)``), ``om`` (group frequencies), ``cgn, cgr`` (gradients
@@ -31,18 +32,21 @@ contacts, ascending), ``env`` (first column of each row of the stick matrix's
 envelope), ``U`` (contacts of the current friction problem), ``cm0`` (modes before
 an event), ``before`` (modes before the friction problem, for the log), ``fired``
 (1 + the log row of the contact's transition in the current event, 0 if none, -1
-unlogged).
+unlogged), ``pos`` (each contact's row in ``sl``, or -1).
 
 ``WF``: ``F`` (generalized forces), ``cN, cNd, cv, cf, cdl`` (per contact normal
 force, its rate, slip velocity, friction force, penetration), ``xst`` (stick
 forces), ``Dd`` and ``Lf`` (envelope LDL^T factor of the stick matrix), ``nullv``
 (its null vector), ``bst`` (stick right-hand side), ``sg, cg`` (sin and cos of each
 frequency group), ``ztmp`` (law-state scratch), ``yev`` (state at an event before
-the friction problem).
+the friction problem), ``cdr`` (penetration rates), ``tsc`` (the time of ``sg, cg``;
+NaN when none).
 
-``integrate`` also takes ``SC`` (``(8, n_state)``: RK4 stages and sub-step states)
-and ``GS`` (``(4, nc, GMAX)``: guard values at the step start, end, bisection point
-and sub-step start). The kernel allocates nothing.
+``integrate`` also takes ``SC`` (``(9, n_state)``: RK4 stages 0-4, the step's or
+bracket's end 5, the trial 6, the sub-step start 7, ``dy/dt`` at the step's end 8)
+and ``GS`` (``(9, nc, GMAX)``: guard values at the step start 0, end 1, trial 2,
+sub-step start 3, bracket start 7, and their rates 4, 5, 6, 8, NaN where unknown).
+The kernel allocates nothing.
 
 Rigid stick (Coulomb) is solved jointly: the stick forces ``x`` of the sticking
 contacts satisfy ``W_SS x = G_S M^-1 F_known`` (zero relative tangential
@@ -60,8 +64,8 @@ import math  # noqa: F401
 
 from blademodel.numeric.contract import (C_BISECTIONS, C_EVENTS, C_FRICTION_PIVOTS, C_LOGGED, C_RECORDS, C_RHS,
                                          C_STEPS, F_B, F_CG, F_D, F_DL, F_F, F_FR, F_L, F_N, F_ND, F_NULL, F_SG,
-                                         F_V, F_X, F_YEV, F_Z, H_N, H_NC, H_NF, H_NG, H_NLAW, MAX_LAW_STATES,
-                                         O_CI, O_CIDX, O_CLAW, O_CP, O_CSO, O_FG, O_FI, O_KI, O_KP, R_CV, R_FC,
+                                         F_V, F_X, F_YEV, F_Z, F_DR, F_T, H_N, H_NC, H_NF, H_NG, H_NLAW, MAX_LAW_STATES,
+                                         O_CI, O_CIDX, O_CLAW, O_CP, O_CSO, O_FG, O_FI, O_KI, O_KP, O_WI, O_WP, R_CV, R_FC,
                                          R_FS, R_GAP, R_GN, R_GR, R_INVM, R_K, R_KV, R_OM, R_W, S_MAX_CONE_RATIO,
                                          STATUS_EVENT_STORM, STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE,
                                          STATUS_OK)
@@ -70,6 +74,9 @@ from blademodel.numeric.contract import (C_BISECTIONS, C_EVENTS, C_FRICTION_PIVO
 NULL_PIVOT = 1e-10
 #: Relative tolerance on the sign of a slipping contact's acceleration in the friction problem.
 SLIP_SIGN_TOL = 1e-9
+#: Cap on the trial sub-steps of one event's location (a bisection at least every third
+#: trial halves the bracket: 2**-50 of a step long before the cap).
+MAX_LOCATE_TRIALS = 160
 
 
 # ---- views of the flat buffers --------------------------------------------------------------
@@ -86,7 +93,8 @@ def mat(a, I, key, rows, cols):
 
 
 def wvec(WI, nc, k):
-    """The ``k``-th per-contact array of ``WI`` (0 ``sl``, 1 ``env``, 2 ``U``, 3 ``cm0``, 4 ``before``, 5 ``fired``)."""
+    """The ``k``-th per-contact array of ``WI`` (0 ``sl``, 1 ``env``, 2 ``U``, 3 ``cm0``, 4 ``before``, 5 ``fired``,
+    6 ``pos``)."""
     o = 2 + k * nc
     return WI[o:o + nc]
 
@@ -112,12 +120,19 @@ def factor_stick(cm, I, R, WI, WF):
             ns += 1
     WI[0] = ns
     WI[1] = -1
+    pos = wvec(WI, nc, 6)   # each contact's row in the stick set, or -1
+    for j in range(nc):
+        pos[j] = -1
     for a in range(ns):
-        env[a] = a
-        for b in range(a):
-            if W[sl[a], sl[b]] != 0.0:
-                env[a] = b
-                break
+        pos[sl[a]] = a
+    Wp, Wi = vec(I, I, O_WP, nc + 1), I[I[O_WI]:]
+    for a in range(ns):
+        e = a
+        for q in range(Wp[sl[a]], Wp[sl[a] + 1]):
+            b = pos[Wi[q]]
+            if 0 <= b < e:
+                e = b
+        env[a] = e
     for i in range(ns):
         for jj in range(env[i], i):
             s = W[sl[i], sl[jj]]
@@ -219,9 +234,12 @@ def contact_forces(t, y, cm, I, R, WI, WF):
     cN, cNd, cv, cf, cdl = (vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc),
                             vec(WF, I, F_FR, nc), vec(WF, I, F_DL, nc))
     sg, cg = vec(WF, I, F_SG, ng), vec(WF, I, F_CG, ng)
-    for g in range(ng):
-        sg[g] = math.sin(om[g] * t)
-        cg[g] = math.cos(om[g] * t)
+    cdr = vec(WF, I, F_DR, nc)
+    if WF[I[F_T]] != t:   # RK4's middle stages and a step's end share their time: sin and cos kept
+        for g in range(ng):
+            sg[g] = math.sin(om[g] * t)
+            cg[g] = math.cos(om[g] * t)
+        WF[I[F_T]] = t
     for i in range(n):
         s = 0.0
         for e in range(Kp[i], Kp[i + 1]):
@@ -245,6 +263,7 @@ def contact_forces(t, y, cm, I, R, WI, WF):
                 dd += cgn[j, k] * y[n + i]
                 vv += cgr[j, k] * y[n + i]
         cdl[j] = dl
+        cdr[j] = dd
         cv[j] = vv
         mode = cm[j]
         if mode == 0:
@@ -291,7 +310,17 @@ def contact_forces(t, y, cm, I, R, WI, WF):
 
 def rhs(t, y, cm, I, R, WI, WF, out):
     """``dy/dt`` with every contact in its mode ``cm[j]``."""
-    power = contact_forces(t, y, cm, I, R, WI, WF)
+    rates(y, cm, I, R, WI, WF, out, contact_forces(t, y, cm, I, R, WI, WF))
+
+
+def rhs_guards(t, y, cm, I, R, WI, WF, out, G):
+    """``dy/dt`` into ``out`` and the guards into ``G`` from one evaluation of the forces."""
+    rates(y, cm, I, R, WI, WF, out, contact_forces(t, y, cm, I, R, WI, WF))
+    guards_of_forces(y, cm, I, R, WF, G)
+
+
+def rates(y, cm, I, R, WI, WF, out, power):
+    """``dy/dt`` from the forces of the last ``contact_forces`` (``power``: the forcing's input power)."""
     n, nc = I[H_N], I[H_NC]
     claw = vec(I, I, O_CLAW, nc)
     invm, F = vec(R, I, R_INVM, n), vec(WF, I, F_F, n)
@@ -321,11 +350,16 @@ def rhs(t, y, cm, I, R, WI, WF, out):
         out[n_law + 2] = fric
 
 
-def rk4_step(t, y, h, cm, I, R, WI, WF, SC, out):
-    """One classical RK4 step of size ``h`` from ``(t, y)`` into ``out`` (stages in ``SC[0:5]``)."""
+def rk4_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1):
+    """One classical RK4 step of size ``h`` from ``(t, y)`` into ``out`` (stages in ``SC[0:5]``).
+
+    With ``have_k1``, ``SC[0]`` already holds ``dy/dt`` at ``(t, y)`` (the end of the
+    previous step, or the first trial from the same point).
+    """
     n = y.shape[0]
     k1, k2, k3, k4, tmp = SC[0], SC[1], SC[2], SC[3], SC[4]
-    rhs(t, y, cm, I, R, WI, WF, k1)
+    if not have_k1:
+        rhs(t, y, cm, I, R, WI, WF, k1)
     for i in range(n):
         tmp[i] = y[i] + 0.5 * h * k1[i]
     rhs(t + 0.5 * h, tmp, cm, I, R, WI, WF, k2)
@@ -343,6 +377,11 @@ def rk4_step(t, y, h, cm, I, R, WI, WF, SC, out):
 def eval_guards(t, y, cm, I, R, WI, WF, G):
     """Every contact's guards into ``G[j, :]``: 0 the penetration, then the law's."""
     contact_forces(t, y, cm, I, R, WI, WF)
+    guards_of_forces(y, cm, I, R, WF, G)
+
+
+def guards_of_forces(y, cm, I, R, WF, G):
+    """The guards from the forces of the last ``contact_forces``."""
     nc = I[H_NC]
     claw = vec(I, I, O_CLAW, nc)
     cN, cNd, cv, cf, cdl = (vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc),
@@ -381,22 +420,174 @@ def first_crossing(cm, I, WI, G0, G1, use_fired):
     return -1
 
 
-def locate_trial(t, y, dt, frac, cm, I, R, WI, WF, SC, ymid, G0, Gm, counters):
-    """RK4 sub-step to the fraction ``frac`` of the step and its guards; the first crossing since the start."""
-    rk4_step(t, y, frac * dt, cm, I, R, WI, WF, SC, ymid)
+def guard_rates(I, WF, D):
+    """Time derivatives of the guards where known (the penetration's), NaN elsewhere."""
+    nc = I[H_NC]
+    cdr = vec(WF, I, F_DR, nc)
+    for j in range(nc):
+        D[j, 0] = cdr[j]
+        for gi in range(1, D.shape[1]):
+            D[j, gi] = math.nan
+
+
+def locate_trial(t, y, dt, frac, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counters):
+    """RK4 sub-step to the fraction ``frac`` of the step, its guards and their rates.
+
+    ``SC[0]`` holds ``dy/dt`` at ``(t, y)`` (every trial starts there). Returns the
+    first crossing since the start.
+    """
+    rk4_step(t, y, frac * dt, cm, I, R, WI, WF, SC, ymid, True)
     eval_guards(t + frac * dt, ymid, cm, I, R, WI, WF, Gm)
+    guard_rates(I, WF, Dm)
     counters[C_BISECTIONS] += 1
-    counters[C_RHS] += 4
+    counters[C_RHS] += 3
     return first_crossing(cm, I, WI, G0, Gm, False)
 
 
-def copy_bracket_end(y1, ymid, G1, Gm):
-    """The trial point becomes the bracket's far end."""
-    for i in range(y1.shape[0]):
-        y1[i] = ymid[i]
-    for j in range(G1.shape[0]):
-        for gi in range(G1.shape[1]):
-            G1[j, gi] = Gm[j, gi]
+def copy_guards(G, Gm, D, Dm):
+    """``G, D = Gm, Dm`` (guards and their rates)."""
+    for j in range(G.shape[0]):
+        for gi in range(G.shape[1]):
+            G[j, gi] = Gm[j, gi]
+            D[j, gi] = Dm[j, gi]
+
+
+def hermite(s, g0, g1, d0, d1):
+    """The cubic Hermite interpolant on ``[0, 1]`` of values ``g0, g1`` and slopes ``d0, d1``; value and slope."""
+    s2 = s * s
+    s3 = s2 * s
+    v = (2.0 * s3 - 3.0 * s2 + 1.0) * g0 + (s3 - 2.0 * s2 + s) * d0 + (3.0 * s2 - 2.0 * s3) * g1 + (s3 - s2) * d1
+    d = (6.0 * s2 - 6.0 * s) * (g0 - g1) + (3.0 * s2 - 4.0 * s + 1.0) * d0 + (3.0 * s2 - 2.0 * s) * d1
+    return v, d
+
+
+def hermite_root(g0, g1, d0, d1, s):
+    """A root in ``(0, 1)`` of the Hermite interpolant by Newton from ``s``; ``s`` itself if it fails."""
+    x = s
+    for _ in range(8):
+        v, d = hermite(x, g0, g1, d0, d1)
+        if d == 0.0 or not math.isfinite(d):
+            return s
+        dx = v / d
+        x -= dx
+        if not 0.0 < x < 1.0:
+            return s
+        if abs(dx) <= 1e-15:
+            break
+    return x
+
+
+def predicted_root(g0, g1, d0, d1, lo, hi, dt):
+    """Predicted root in ``(lo, hi)`` of a guard with values ``g0, g1`` and rates ``d0, d1`` at the ends."""
+    x = g0 / (g0 - g1) if g0 != g1 else 0.5
+    if math.isfinite(d0) and math.isfinite(d1):
+        span = (hi - lo) * dt
+        x = hermite_root(g0, g1, d0 * span, d1 * span, x)
+    return lo + x * (hi - lo)
+
+
+def earliest_crossing(cm, I, WI, Glo, G1, Dlo, D1, lo, hi, dt):
+    """``j * GMAX + gi`` of the crossed guard with the earliest predicted root in ``(lo, hi)``, and that root."""
+    nc = I[H_NC]
+    claw = vec(I, I, O_CLAW, nc)
+    best = -1
+    xbest = hi
+    for j in range(nc):
+        K = claw[j]
+        m = cm[j]
+        for gi in range(NG[K, m]):  # noqa: F821
+            if crossed(Glo[j, gi], G1[j, gi], GDIR[K, m, gi]):  # noqa: F821
+                x = predicted_root(Glo[j, gi], G1[j, gi], Dlo[j, gi], D1[j, gi], lo, hi, dt)
+                if best < 0 or x < xbest:
+                    best = j * GMAX + gi  # noqa: F821
+                    xbest = x
+    return best, xbest
+
+
+def locate_event(t, y, dt, cm, I, R, WI, WF, SC, GS, width, counters):
+    """Bracket the earliest guard crossing of the sub-step ``[t, t + dt]`` to ``width`` (a fraction of it).
+
+    On entry ``SC[0]`` holds ``dy/dt`` at ``(t, y)``, ``SC[5]`` the state at the
+    sub-step's end and ``GS[0]``, ``GS[1]`` (``GS[4]``, ``GS[5]``) the guards (rates) at
+    its two ends. Every trial is the true RK4 sub-step of that length, so the root
+    is the one of the discrete flow. The first trial is the root of the cubic
+    Hermite interpolant of the target guard where its rates are known (the
+    penetration), else of the chord; the next ones are Newton steps on the
+    interpolant's slope, then secants through the last two trials, kept inside the
+    bracket, with a bisection when two trials did not halve it; a trial predicted
+    within half a tolerance of one end is set three quarters of a tolerance past it,
+    to close the bracket in one trial. The bracket is kept by ``first_crossing``
+    over every guard (an earlier crossing of another guard becomes the target).
+
+    Returns the bracket's far end ``hi``; ``SC[5]`` and ``GS[1]`` then hold the state
+    and guards there, past the root by at most ``width`` of the sub-step (or by the
+    floating-point resolution of the step, if the tolerance is finer).
+    """
+    y1, ymid = SC[5], SC[6]
+    G0, G1, Gm, Glo = GS[0], GS[1], GS[2], GS[7]
+    D0, D1, Dm, Dlo = GS[4], GS[5], GS[6], GS[8]
+    copy_guards(Glo, G0, Dlo, D0)
+    lo = 0.0
+    hi = 1.0
+    code, x = earliest_crossing(cm, I, WI, Glo, G1, Dlo, D1, lo, hi, dt)
+    if code < 0:
+        code = first_crossing(cm, I, WI, G0, G1, False)
+    jt = code // GMAX  # noqa: F821
+    gt = code - jt * GMAX  # noqa: F821
+    # the last two trials of the target guard (fraction, value), for the secant
+    xa, ga, xb, gb = lo, Glo[jt, gt], hi, G1[jt, gt]
+    slope = math.nan
+    k = 0
+    w_old = 1.0
+    k_pred = 0
+    while hi - lo > width and k < MAX_LOCATE_TRIALS:
+        if k > k_pred:
+            if math.isfinite(slope) and slope != 0.0:
+                x = xb - gb / slope
+                slope = math.nan
+            elif gb != ga:
+                x = xb - gb * (xb - xa) / (gb - ga)
+            else:
+                x = 0.5 * (lo + hi)
+            if k % 2 == 0:
+                if hi - lo > 0.5 * w_old:
+                    x = 0.5 * (lo + hi)
+                w_old = hi - lo
+        if not lo < x < hi:
+            x = 0.5 * (lo + hi)
+        if x - lo < 0.5 * width:
+            x = min(lo + 0.75 * width, 0.5 * (lo + hi)) if hi - lo > 1.5 * width else lo + 0.75 * width
+        elif hi - x < 0.5 * width:
+            x = max(hi - 0.75 * width, 0.5 * (lo + hi)) if hi - lo > 1.5 * width else hi - 0.75 * width
+        if not lo < x < hi:
+            break   # the bracket is as narrow as the floating-point resolution allows
+        k += 1
+        c = locate_trial(t, y, dt, x, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counters)
+        if c >= 0:
+            hi = x
+            for i in range(y1.shape[0]):
+                y1[i] = ymid[i]
+            copy_guards(G1, Gm, D1, Dm)
+        else:
+            lo = x
+            copy_guards(Glo, Gm, Dlo, Dm)
+        if c >= 0 and c != code:
+            # an earlier crossing of another guard: the earliest predicted in the new bracket is the target
+            code, xnext = earliest_crossing(cm, I, WI, Glo, G1, Dlo, D1, lo, hi, dt)
+            if code < 0:
+                code = c
+            jt = code // GMAX  # noqa: F821
+            gt = code - jt * GMAX  # noqa: F821
+            xa, ga, xb, gb = lo, Glo[jt, gt], hi, G1[jt, gt]
+            slope = math.nan
+            x = xnext
+            k_pred = k
+            continue
+        if k == k_pred + 1 and math.isfinite(Dm[jt, gt]):
+            slope = Dm[jt, gt] * dt   # the next trial: a Newton step on the guard's own rate
+        xa, ga = xb, gb
+        xb, gb = x, Gm[jt, gt]
+    return hi
 
 
 def first_near_crossing(cm, I, WI, Gs, G1, span, tol):
@@ -653,8 +844,9 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
     nc = I[H_NC]
     fired = wvec(WI, nc, 5)
     h = period / steps_per_period
-    y1, ymid, ysub = SC[5], SC[6], SC[7]
-    G0, G1, Gm, Gs = GS[0], GS[1], GS[2], GS[3]
+    y1, ymid, ysub, knext = SC[5], SC[6], SC[7], SC[8]
+    G0, G1, Gs = GS[0], GS[1], GS[3]
+    D0, D1 = GS[4], GS[5]
     t = period * start_period
     irec = counters[C_RECORDS]
     g0_valid = False
@@ -673,70 +865,26 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
             n_events = 0
             while t < t_end:
                 dt = t_end - t
-                rk4_step(t, y, dt, cm, I, R, WI, WF, SC, y1)
-                counters[C_RHS] += 4
                 if not g0_valid:
-                    eval_guards(t, y, cm, I, R, WI, WF, G0)
-                eval_guards(t_end, y1, cm, I, R, WI, WF, G1)
+                    rhs_guards(t, y, cm, I, R, WI, WF, SC[0], G0)
+                    guard_rates(I, WF, D0)
+                    counters[C_RHS] += 1
+                # SC[0] holds dy/dt at (t, y): from the line above or the end of the last step
+                rk4_step(t, y, dt, cm, I, R, WI, WF, SC, y1, True)
+                rhs_guards(t_end, y1, cm, I, R, WI, WF, knext, G1)
+                guard_rates(I, WF, D1)
+                counters[C_RHS] += 4
                 if first_crossing(cm, I, WI, G0, G1, False) < 0:
                     for i in range(n):
                         y[i] = y1[i]
-                    for j in range(nc):
-                        for gi in range(GMAX):  # noqa: F821
-                            G0[j, gi] = G1[j, gi]
+                        SC[0, i] = knext[i]
+                    copy_guards(G0, G1, D0, D1)
                     g0_valid = True
                     t = t_end
                     if WI[0] > 0:
                         stats[S_MAX_CONE_RATIO] = max(stats[S_MAX_CONE_RATIO], cone_ratio(y, I, R, WI, WF))
                     break
-                # Bracket the earliest crossing on the RK4 sub-step map: Illinois steps on the
-                # guard that crossed first, every third step a bisection, the bracket kept by
-                # first_crossing; then the far end is set exactly one tolerance past the near
-                # end, so the state lies past the root by at most the tolerance.
-                lo = 0.0
-                hi = 1.0
-                code = first_crossing(cm, I, WI, G0, G1, False)
-                jt = code // GMAX  # noqa: F821
-                gt = code - jt * GMAX  # noqa: F821
-                glo = G0[jt, gt]
-                ghi = G1[jt, gt]
-                side = 0
-                k = 0
-                width = event_tol * h / dt
-                while hi - lo > width:
-                    mid = 0.5 * (lo + hi)
-                    if k % 3 != 2 and glo != ghi:
-                        frac = glo / (glo - ghi)
-                        if 0.0 < frac < 1.0:
-                            mid = lo + frac * (hi - lo)
-                    if not (lo < mid < hi):
-                        mid = 0.5 * (lo + hi)
-                    k += 1
-                    c = locate_trial(t, y, dt, mid, cm, I, R, WI, WF, SC, ymid, G0, Gm, counters)
-                    if c >= 0:
-                        hi = mid
-                        copy_bracket_end(y1, ymid, G1, Gm)
-                        if c != code:
-                            code = c
-                            jt = code // GMAX  # noqa: F821
-                            gt = code - jt * GMAX  # noqa: F821
-                            glo = G0[jt, gt]
-                            side = 0
-                        elif side == 1:
-                            glo *= 0.5
-                        ghi = Gm[jt, gt]
-                        side = 1
-                    else:
-                        lo = mid
-                        if side == -1:
-                            ghi *= 0.5
-                        glo = Gm[jt, gt]
-                        side = -1
-                hi2 = min(lo + width, 1.0)
-                if hi < 1.0 and hi2 != hi:
-                    if locate_trial(t, y, dt, hi2, cm, I, R, WI, WF, SC, ymid, G0, Gm, counters) >= 0:
-                        hi = hi2
-                        copy_bracket_end(y1, ymid, G1, Gm)
+                hi = locate_event(t, y, dt, cm, I, R, WI, WF, SC, GS, event_tol * h / dt, counters)
                 code = first_crossing(cm, I, WI, G0, G1, False)
                 t_sub = t
                 for i in range(n):
