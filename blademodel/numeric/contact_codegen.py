@@ -10,9 +10,10 @@ only, never on the number of contacts or blades.
 from __future__ import annotations
 
 import inspect
+import re
 
 from ..components.friction.base import FrictionLaw
-from . import contact_loop
+from . import contact_loop, contact_rigid_stubs
 from .law_codegen import law_code
 
 #: Functions compiled with Numba (``njit(cache=True)``).
@@ -25,7 +26,7 @@ _ENTRY_POINTS = ("integrate", "initial_modes", "rhs", "factor_stick", "contact_f
 #: reference counting may only return an array it was given).
 _VIEWS = ("vec", "mat", "wvec", "law_offset")
 
-_TEMPLATE_FUNCTIONS = ("vec", "mat", "wvec", "law_offset", "record", "factor_stick", "back_substitute", "solve_stick", "slip_bound", "least_cone_ratio",
+_TEMPLATE_FUNCTIONS = ("runtime", "vec", "mat", "wvec", "law_offset", "record", "factor_stick", "back_substitute", "solve_stick", "slip_bound", "least_cone_ratio",
                        "contact_forces", "rates", "rhs", "rhs_guards", "rk4_step", "guards_of_forces", "eval_guards",
                        "crossed", "first_crossing", "cone_ratio", "first_near_crossing", "guard_rates",
                        "locate_trial", "copy_guards", "hermite", "hermite_root", "predicted_root",
@@ -46,6 +47,35 @@ _DISPATCH = {
     "law_energy": ("y, so, R, I, j", "return {call}", "return 0.0"),
     "law_dissipation": ("mode, N, Nd, v, f, y, so, R, I, j", "return {call}", "return 0.0"),
 }
+
+
+_VIEW_CALL = re.compile(r"(?<![\w.])(vec|mat|wvec|law_offset)\(([^()]*)\)")
+#: The views written out (``a``, ``I``, ``key``, ... are the call's arguments, all plain names).
+_VIEW_EXPANSION = {
+    "vec": lambda a, I, key, size: f"{a}[{I}[{key}]:{I}[{key}] + {size}]",
+    "mat": lambda a, I, key, rows, cols: f"{a}[{I}[{key}]:{I}[{key}] + ({rows}) * ({cols})].reshape(({rows}, {cols}))",
+    "wvec": lambda WI, nc, k: f"{WI}[2 + ({k}) * ({nc}):2 + ({k} + 1) * ({nc})]",
+    "law_offset": lambda I, j: f"(2 * {I}[H_N] + {I}[{I}[O_CSO] + {j}])",
+}
+
+
+def expand_views(source: str) -> str:
+    """``source`` with every call of a view helper written out as the slice it returns.
+
+    The helpers document the buffer layout; written out, the slices cost Numba
+    nothing to inline (``inline='always'`` types each inlined body again: a tenth of
+    the compile time). Their definitions stay in the module, unused.
+    """
+    def one(m):
+        args = [a.strip() for a in m.group(2).split(",")]
+        return _VIEW_EXPANSION[m.group(1)](*args)
+    lines = []
+    for line in source.split("\n"):
+        if line.lstrip().startswith("def "):
+            lines.append(line)
+        else:
+            lines.append(_VIEW_CALL.sub(one, line))
+    return "\n".join(lines)
 
 
 def generate_contact_kernel(laws: list[FrictionLaw]) -> tuple[str, dict]:
@@ -93,13 +123,18 @@ def generate_contact_kernel(laws: list[FrictionLaw]) -> tuple[str, dict]:
     L.append(f"NSTATES = np.array({table(nst)}, dtype=np.int64)")
     L.append("")
     L.append("# ---- the per-contact loop (blademodel/numeric/contact_loop.py) ----")
-    L.append(inspect.getsource(contact_loop))
+    L.append(expand_views(inspect.getsource(contact_loop)))
     L.append("")
+    if not any(c.rigid for c in codes):
+        L.append("# ---- no rigid stick (blademodel/numeric/contact_rigid_stubs.py) ----")
+        L.append(inspect.getsource(contact_rigid_stubs))
+        L.append("")
     fns = [f"law{K}_{f}" for K in range(len(codes))
            for f in ("force", "rates", "guards", "transition", "energy", "dissipation")]
     for fn in (*fns, *_DISPATCH, *_TEMPLATE_FUNCTIONS):
         inline = ", inline='always'" if fn in _VIEWS else ""
-        cache = "cache=True, " if fn in _ENTRY_POINTS else ""
+        # Only entry points are called from Python: the others need no CPython or C wrapper.
+        cache = "cache=True, " if fn in _ENTRY_POINTS else "no_cpython_wrapper=True, no_cfunc_wrapper=True, "
         L.append(f"{fn} = njit({cache}_nrt=False{inline})({fn})")
     meta = {"kinds": [{"modes": c.modes, "guards": c.guard_names, "states": c.state_names,
                        "params": c.param_fields, "rigid": list(c.rigid) if c.rigid else None} for c in codes],

@@ -79,6 +79,13 @@ SLIP_SIGN_TOL = 1e-9
 MAX_LOCATE_TRIALS = 160
 
 
+def runtime(x):
+    """``x`` (an int or bool) as a run-time value: Numba types a constant argument as a
+    literal and compiles a copy of the callee, and of all it calls, for each literal
+    (``x | x`` is ``x``, and no longer a literal)."""
+    return x | x
+
+
 # ---- views of the flat buffers --------------------------------------------------------------
 def vec(a, I, key, size):
     """The table at offset ``I[key]`` of ``a``, ``size`` long."""
@@ -400,17 +407,17 @@ def crossed(g0, g1, direction):
     return (g0 > 0.0 and g1 <= 0.0) or (g0 < 0.0 and g1 >= 0.0)
 
 
-def first_crossing(cm, I, WI, G0, G1, use_fired):
+def first_crossing(cm, I, WI, G0, G1):
     """``j * GMAX + gi`` of the first guard that crossed (contacts in order), or -1.
 
-    With ``use_fired``, contacts whose transition fired in this event are passed
-    over: their law has settled them, and their new mode's guards compared across
-    the bracket mean nothing.
+    Contacts whose transition fired in the current event are passed over: their law
+    has settled them, and their new mode's guards compared across the bracket mean
+    nothing (outside an event no contact is marked).
     """
     nc = I[H_NC]
     claw, fired = vec(I, I, O_CLAW, nc), wvec(WI, nc, 5)
     for j in range(nc):
-        if use_fired and fired[j] != 0:
+        if fired[j] != 0:
             continue
         K = claw[j]
         m = cm[j]
@@ -441,7 +448,7 @@ def locate_trial(t, y, dt, frac, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counter
     guard_rates(I, WF, Dm)
     counters[C_BISECTIONS] += 1
     counters[C_RHS] += 3
-    return first_crossing(cm, I, WI, G0, Gm, False)
+    return first_crossing(cm, I, WI, G0, Gm)
 
 
 def copy_guards(G, Gm, D, Dm):
@@ -531,7 +538,7 @@ def locate_event(t, y, dt, cm, I, R, WI, WF, SC, GS, width, counters):
     hi = 1.0
     code, x = earliest_crossing(cm, I, WI, Glo, G1, Dlo, D1, lo, hi, dt)
     if code < 0:
-        code = first_crossing(cm, I, WI, G0, G1, False)
+        code = first_crossing(cm, I, WI, G0, G1)
     jt = code // GMAX  # noqa: F821
     gt = code - jt * GMAX  # noqa: F821
     # the last two trials of the target guard (fraction, value), for the secant
@@ -781,7 +788,7 @@ def settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log
                 if k >= 0 and k < log_to.shape[0]:
                     log_to[k] = cm[j]
             else:
-                log_event(t, j, -1, before[j], cm[j], log_t, log_c, log_g, log_from, log_to, counters,
+                log_event(t, j, runtime(-1), before[j], cm[j], log_t, log_c, log_g, log_from, log_to, counters,
                           recording, fired)
     factor_stick(cm, I, R, WI, WF)
     for j in range(nc):
@@ -805,9 +812,9 @@ def initial_modes(t, y, cm, I, R, WI, WF, G, counters, max_pivots, e, ei):
     eval_guards(t, y, cm, I, R, WI, WF, G)
     for j in range(nc):
         if G[j, 0] >= 0.0 and NG[claw[j], 0] > 0:  # noqa: F821
-            cm[j] = apply_transition(t, y, cm, j, 0, I, R, WI, WF)
+            cm[j] = apply_transition(t, y, cm, j, runtime(0), I, R, WI, WF)
             factor_stick(cm, I, R, WI, WF)
-    return settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, e, ei, ei, ei, ei, False)
+    return settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, e, ei, ei, ei, ei, runtime(False))
 
 
 def record(irec, t, y, cm, I, R, WI, WF, rec_t, rec_y, rec_cm, rec_N, rec_f):
@@ -874,7 +881,7 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                 rhs_guards(t_end, y1, cm, I, R, WI, WF, knext, G1)
                 guard_rates(I, WF, D1)
                 counters[C_RHS] += 4
-                if first_crossing(cm, I, WI, G0, G1, False) < 0:
+                if first_crossing(cm, I, WI, G0, G1) < 0:
                     for i in range(n):
                         y[i] = y1[i]
                         SC[0, i] = knext[i]
@@ -885,7 +892,7 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                         stats[S_MAX_CONE_RATIO] = max(stats[S_MAX_CONE_RATIO], cone_ratio(y, I, R, WI, WF))
                     break
                 hi = locate_event(t, y, dt, cm, I, R, WI, WF, SC, GS, event_tol * h / dt, counters)
-                code = first_crossing(cm, I, WI, G0, G1, False)
+                code = first_crossing(cm, I, WI, G0, G1)
                 t_sub = t
                 for i in range(n):
                     ysub[i] = y[i]
@@ -906,7 +913,7 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                     factor_stick(cm, I, R, WI, WF)
                     eval_guards(t_sub, ysub, cm, I, R, WI, WF, Gs)
                     eval_guards(t, y, cm, I, R, WI, WF, G1)
-                    code = first_crossing(cm, I, WI, Gs, G1, True)
+                    code = first_crossing(cm, I, WI, Gs, G1)
                     if code < 0:
                         code = first_near_crossing(cm, I, WI, Gs, G1, t - t_sub, event_tol * h)
                 if not settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log_g,
