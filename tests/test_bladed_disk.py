@@ -24,7 +24,7 @@ def test_pair_on_the_per_contact_kernel_equals_the_product_kernel(law):
 
     The pair itself runs on the product kernel (``kernel="auto"``), so its results are unchanged to
     the bit. Across the kernels the arithmetic is ordered differently and events are bracketed
-    differently (bisection; Illinois steps), each event state lying past its root by at most the
+    differently (bisection; predicted roots and secants), each event state lying past its root by at most the
     event tolerance: after 80 periods and ~2000 events the states agree to about 1e-11 of their
     amplitudes, with the same event sequence.
     """

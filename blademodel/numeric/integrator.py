@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
@@ -22,6 +23,11 @@ def excitation_period(model: Model) -> float:
     return 2 * math.pi / omegas.pop()
 
 
+#: Finest event tolerance (a fraction of the step) that double precision resolves everywhere in a step:
+#: a finer one is accepted with a warning, and the bracket stops at the resolution.
+EVENT_TOL_FLOOR = 1e-15
+
+
 def check_settings(steps_per_period, event_tol, max_events_per_step) -> None:
     """Validate the settings every kernel shares; raise ``ValueError`` naming the bad one."""
     for name, value in (("steps_per_period", steps_per_period), ("max_events_per_step", max_events_per_step)):
@@ -29,6 +35,10 @@ def check_settings(steps_per_period, event_tol, max_events_per_step) -> None:
             raise ValueError(f"{name} = {value!r} must be an integer >= 1")
     if not (event_tol > 0 and math.isfinite(event_tol)):
         raise ValueError(f"event_tol = {event_tol!r} must be a positive number")
+    if event_tol < EVENT_TOL_FLOOR:
+        warnings.warn(f"event_tol = {event_tol!r} is below what double precision resolves within a step "
+                      f"(about {EVENT_TOL_FLOOR:g} of it); events are located to that resolution instead",
+                      stacklevel=3)
 
 
 def state_vector(names: list, n_state: int, y0=None) -> np.ndarray:

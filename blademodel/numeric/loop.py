@@ -164,6 +164,8 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
                 hi = 1.0
                 while (hi - lo) * dt > event_tol * h:
                     mid = 0.5 * (lo + hi)
+                    if not lo < mid < hi:
+                        break   # the bracket is as narrow as the floating-point resolution allows
                     rk4_step(mode, t, y, mid * dt, p, k1, k2, k3, k4, tmp, ymid)
                     guards(mode, t + mid * dt, ymid, p, gm)  # noqa: F821
                     counters[C_BISECTIONS] += 1
