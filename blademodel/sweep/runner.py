@@ -61,6 +61,7 @@ def _say(message: str) -> None:
 def _prepare(out: Path, layout: dict, expected: tuple, study_json: str, restart: bool,
              log: Callable[[str], None] | None) -> list[int]:
     """Create, verify (and repair) the result file; return the points still to run."""
+    storage.remove_aside(out)
     if out.exists() and restart:
         out.unlink()
     if not out.exists():

@@ -120,6 +120,17 @@ def create(path: Path, *, study_json: str, fields: list[str], values: list[list]
     tmp.replace(path)
 
 
+#: Files written aside next to a result file (``x.nc.new``, ``x.nc.rebuild``, ...) before being renamed.
+ASIDE = (".new", ".rebuild", ".rebuild.new")
+
+
+def remove_aside(path: Path) -> None:
+    """Remove what a killed :func:`create` or :func:`rebuild` left next to ``path`` (hold the lock)."""
+    path = Path(path)
+    for suffix in ASIDE:
+        path.with_name(path.name + suffix).unlink(missing_ok=True)
+
+
 def _row_variables(ds) -> list[str]:
     """The variables a point's checksum covers, in a fixed order."""
     fields = json.loads(ds.getncattr("fields"))
