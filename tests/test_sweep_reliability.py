@@ -11,7 +11,6 @@ import subprocess
 import sys
 import time
 
-import numpy as np
 import pytest
 
 from blademodel.sweep import Study, open_result, run_study
@@ -149,9 +148,11 @@ def test_empty_result_file_is_refused_with_a_way_forward(tmp_path, reference):
     out.write_bytes(b"")
     r = cli("sweep", study, "--out", out, "--workers", "1", "--no-plot")
     assert r.returncode == 2
-    assert one_line(r.stderr) == (f"error: {out} is empty (0 bytes), not a result file; pass --restart to "
-                                  f"discard it and start again")
+    assert one_line(r.stderr) == (f"error: {out} is empty (0 bytes), not a result file; run the sweep with "
+                                  f"--restart to discard it and start again")
     assert out.stat().st_size == 0 and not lock_path(out).exists()
+    r = cli("plot", out)
+    assert r.returncode == 2 and one_line(r.stderr).startswith(f"error: {out} is empty (0 bytes)")
     r = cli("sweep", study, "--out", out, "--workers", "1", "--no-plot", "--restart")
     assert r.returncode == 0, r.stderr
     assert raw_contents(out) == raw_contents(reference)

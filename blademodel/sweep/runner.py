@@ -161,11 +161,17 @@ def run_study(study: Study, out: str | Path, *, workers: int | None = None, sche
                         progress(done, total)
                 return out
             tasks = [(i, study.base, overrides[i], run) for i in todo]
-            for i, result in choose(workers, scheduler)(tasks):
-                storage.write_point(out, i, result)
-                done += 1
-                if progress:
-                    progress(done, total)
+            results = choose(workers, scheduler)(tasks)
+            try:
+                for i, result in results:
+                    storage.write_point(out, i, result)
+                    done += 1
+                    if progress:
+                        progress(done, total)
+            finally:   # stops the executor's workers now if this loop ended early
+                close = getattr(results, "close", None)
+                if close is not None:
+                    close()
         except KeyboardInterrupt:
             if sys.stderr.isatty():
                 print(file=sys.stderr)   # end the progress bar's line

@@ -240,13 +240,13 @@ def open_dataset(path: Path) -> netCDF4.Dataset:
     size = path.stat().st_size
     if size == 0:
         raise ResultFileError(f"{path} is empty (0 bytes), not a result file; "
-                              f"pass --restart to discard it and start again")
+                              f"run the sweep with --restart to discard it and start again")
     try:
         ds = netCDF4.Dataset(path, "r")
     except (OSError, RuntimeError) as e:
         why = getattr(e, "strerror", None) or str(e) or type(e).__name__
-        raise ResultFileError(f"{path} is not a readable result file ({why}); pass --restart to discard "
-                              f"it and start again") from None
+        raise ResultFileError(f"{path} is not a readable result file ({why}); run the sweep with --restart "
+                              f"to discard it and start again") from None
     missing = [n for n in REQUIRED if n not in ds.variables and n not in ds.dimensions]
     try:
         fields_ok = isinstance(json.loads(ds.getncattr("fields")), list) and "signature" in ds.ncattrs()
@@ -255,8 +255,8 @@ def open_dataset(path: Path) -> netCDF4.Dataset:
     if missing or not fields_ok:
         ds.close()
         what = ", ".join(missing) if missing else "study attributes"
-        raise ResultFileError(f"{path} is damaged or not a blademodel result file (no {what}); pass --restart "
-                              f"to discard it and start again")
+        raise ResultFileError(f"{path} is damaged or not a blademodel result file (no {what}); run the sweep "
+                              f"with --restart to discard it and start again")
     return ds
 
 
