@@ -140,6 +140,39 @@ def test_workers_exit_when_the_parent_is_killed(tmp_path):
     assert done_count(out) < 6
 
 
+WATCHED_CHILD = """
+import multiprocessing, os, sys, time
+from blademodel.sweep import workers
+
+def child(parent):
+    workers._set_parent_death_signal = lambda sig: False   # as where prctl does not exist
+    workers.init_worker(parent)
+    time.sleep(120)
+
+if __name__ == "__main__":
+    p = multiprocessing.get_context("fork").Process(target=child, args=(os.getpid(),))
+    p.start()
+    print(p.pid, flush=True)
+    time.sleep(120)
+"""
+
+
+@linux_only
+def test_the_watchdog_alone_ends_a_worker_whose_parent_died(tmp_path):
+    script = tmp_path / "watched.py"
+    script.write_text(WATCHED_CHILD)
+    tag = "watchdog-" + str(os.getpid())
+    parent = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True, env=cli_env(tag))
+    try:
+        child = int(parent.stdout.readline())
+        assert child in tagged(tag)
+        parent.kill()
+        parent.wait()
+        assert wait_until(lambda: child not in tagged(tag), 3), "the watchdog did not end the worker"
+    finally:
+        kill_all(tag)
+
+
 # ----------------------------------------------------------------- empty file
 
 def test_empty_result_file_is_refused_with_a_way_forward(tmp_path, reference):
