@@ -324,3 +324,51 @@ def test_unreachable_scheduler_is_named(tmp_path):
     message = one_line(r.stderr)
     assert message.startswith(f"error: cannot reach the Dask scheduler at {address} (")
     assert message.endswith("check the address and that the scheduler is running")
+
+
+def _without_checksums(src, dst):
+    """A copy of ``src`` as blademodel wrote it before checksums (no ``checksum``, no ``tail``)."""
+    import netCDF4
+    with netCDF4.Dataset(src) as a, netCDF4.Dataset(dst, "w", format=a.data_model) as b:
+        a.set_auto_maskandscale(False)
+        a.set_auto_chartostring(False)
+        for name, dim in a.dimensions.items():
+            if name != "checksum_chars":
+                b.createDimension(name, len(dim))
+        b.setncatts({k: a.getncattr(k) for k in a.ncattrs()})
+        for name, var in a.variables.items():
+            if name in ("checksum", "tail"):
+                continue
+            fill = var.getncattr("_FillValue") if "_FillValue" in var.ncattrs() else None
+            out = b.createVariable(name, var.dtype, var.dimensions, fill_value=fill)
+            out.set_auto_maskandscale(False)
+            out.set_auto_chartostring(False)
+            out[:] = var[:]
+    return dst
+
+
+def test_a_file_from_before_checksums_still_resumes(tmp_path, reference):
+    old = _without_checksums(reference, tmp_path / "old.nc")
+    import netCDF4
+    with netCDF4.Dataset(old, "a") as ds:
+        ds["done"][2:] = 0
+    said = []
+    run_study(Study.model_validate(TINY), old, workers=1, progress=None, log=said.append)
+    assert said[0] == (f"{old}: written by an older blademodel without checksums, so its points cannot be "
+                       f"verified; --restart recomputes them")
+    data, _ = raw_contents(old)
+    ref, _ = raw_contents(reference)
+    assert data == {k: v for k, v in ref.items() if k not in ("checksum", "tail")}
+    assert int(open_result(old)["done"].sum()) == 4
+
+
+def test_a_damaged_file_from_before_checksums_is_rebuilt_with_them(tmp_path, reference):
+    old = _without_checksums(reference, tmp_path / "old.nc")
+    import netCDF4
+    with netCDF4.Dataset(old, "a") as ds:
+        ds["done"][2:] = 0
+        ds["param_gamma"][3] = 99.0          # the parameter table no longer the study's
+    said = []
+    run_study(Study.model_validate(TINY), old, workers=1, progress=None, log=said.append)
+    assert any("its parameter or law table is damaged; keeping the 2 point(s)" in s for s in said), said
+    assert old.read_bytes() == reference.read_bytes()   # rebuilt in the current layout, points sealed

@@ -177,11 +177,16 @@ def write_point(path: Path, index: int, out: dict) -> None:
         ds["error"][index, :] = _chars(out["error"] or "failed", ERROR_CHARS) if failed \
             else np.zeros(ERROR_CHARS, dtype="S1")
         ds.sync()  # the values reach the disk before the point is marked done
-        if "checksum" in ds.variables:
-            _raw(ds)
-            rows = [ds[name][index] for name in _row_variables(ds)]
-            ds["checksum"][index, :] = np.frombuffer(_digest(index, rows), dtype="S1")
+        _seal(ds, index)
         ds["done"][index] = 1
+
+
+def _seal(ds, index: int) -> None:
+    """Store the checksum of point ``index``'s row as it is in the file (files without checksums: nothing)."""
+    if "checksum" in ds.variables:
+        _raw(ds)
+        rows = [ds[name][index] for name in _row_variables(ds)]
+        ds["checksum"][index, :] = np.frombuffer(_digest(index, rows), dtype="S1")
 
 
 @dataclass
@@ -332,6 +337,9 @@ def rebuild(path: Path, keep: list[int], **layout) -> None:
             rows = np.asarray(src[name][:])
             for i in keep:
                 dst[name][i] = rows[i]
+        if "checksum" not in src.variables:   # a file from before checksums: seal its points now
+            for i in keep:
+                _seal(dst, i)
         dst.sync()
         for i in keep:
             dst["done"][i] = 1
