@@ -20,6 +20,8 @@ COMMANDS = ["equations", "simulate", "sweep", "reproduce", "plot"]
 
 #: Exit code of a usage or config error (as argparse uses).
 EXIT_USAGE = 2
+#: Exit code after Ctrl-C (128 + SIGINT, as shells report it).
+EXIT_INTERRUPTED = 130
 
 
 def _load_commands() -> list:
@@ -62,18 +64,30 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     Returns
     -------
     int
-        The exit code: 0 on success, 2 on a usage, config or value error (the
-        message is printed to stderr as ``error: ...``, without a traceback).
+        The exit code: 0 on success, 2 on a usage, config or value error or a
+        damaged result file, 1 on another failure (a result file locked by
+        another sweep, a lost worker, an unreachable scheduler, a sweep whose
+        every point failed), 130 after Ctrl-C. Messages are printed to stderr
+        as ``error: ...``, without a traceback.
     """
-    args = build_parser().parse_args(argv)
     try:
+        args = build_parser().parse_args(argv)
         return int(args.run(args) or 0)
+    except KeyboardInterrupt as e:  # Ctrl-C: one line (a sweep's says how to resume), no traceback
+        print(("\n" if sys.stderr.isatty() else "") + (str(e) or "interrupted"), file=sys.stderr)
+        return EXIT_INTERRUPTED
     except BrokenPipeError:  # the reader went away (``blademodel ... | head``)
         sys.stderr.close()
         return 0
-    except (ValueError, KeyError) as e:  # ConfigError is a ValueError
-        print(f"error: {_message(e)}", file=sys.stderr)
-        return EXIT_USAGE
+    except Exception as e:
+        from .sweep.errors import SweepError  # imported here: Ctrl-C is caught from the first line of main
+        if isinstance(e, SweepError):  # a damaged or locked result file, a lost worker, no scheduler
+            print(f"error: {e}", file=sys.stderr)
+            return e.exit_code
+        if isinstance(e, (ValueError, KeyError)):  # ConfigError is a ValueError
+            print(f"error: {_message(e)}", file=sys.stderr)
+            return EXIT_USAGE
+        raise
 
 
 if __name__ == "__main__":

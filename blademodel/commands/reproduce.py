@@ -25,19 +25,20 @@ def register(subparsers) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Reproduce the figures; return the exit code."""
+    """Reproduce the figures; return the exit code (1 if every point of a figure failed)."""
     known = paper_figures()
     names = sorted(known) if "all" in args.figure else args.figure
     unknown = [n for n in names if n not in known]
     if unknown:
         raise ValueError(f"unknown figure {', '.join(unknown)}; known: {', '.join(known)} or all")
-    summary = {}
+    summary, failed = {}, 0
     for name in names:
         study = load_study(known[name])
         folder = Path(args.out) / name
         out = folder / f"{name}{'_quick' if args.quick else ''}.nc"
         t0 = time.perf_counter()
-        figures = execute(study, out, args)
+        figures, ok = execute(study, out, args)
+        failed += not ok
         seconds = time.perf_counter() - t0
         entry = {"title": study.title, "paper": study.paper, "seconds": round(seconds, 1),
                  "data": str(out), "figures": [str(f) for f in figures]}
@@ -55,4 +56,4 @@ def run(args: argparse.Namespace) -> int:
     previous = json.loads(path.read_text()) if path.exists() else {}
     path.write_text(json.dumps({**previous, **summary}, indent=2))
     print(f"summary: {path}")
-    return 0
+    return 1 if failed else 0

@@ -42,8 +42,11 @@ def load_result(path):
         raise ValueError(f"no such result file: {path}")
     if not path.is_file():
         raise ValueError(f"{path} is not a file")
+    from ..sweep.errors import ResultFileError
     try:
         ds = open_result(path)
+    except ResultFileError:   # empty, unreadable or damaged: its message says what to do
+        raise
     except KeyError as e:
         raise ValueError(f"{path} is not a blademodel result file (no {e.args[0]!r} attribute)") from None
     except (OSError, ValueError, TypeError) as e:  # json.JSONDecodeError is a ValueError

@@ -11,7 +11,9 @@ from typing import Callable
 import numpy as np
 
 from . import storage
+from .errors import ResultFileError, SweepInterrupted
 from .executors import choose
+from .lock import ResultLock
 from ..analysis import motion_class
 from .point import build_config, motion_code, run_point
 from .spec import Study
@@ -52,9 +54,48 @@ def _bar(done: int, total: int) -> None:
         print(f"\r[{bar:<30}] {done}/{total} points", end="" if done < total else "\n", file=sys.stderr)
 
 
+def _say(message: str) -> None:
+    print(message, file=sys.stderr)
+
+
+def _prepare(out: Path, layout: dict, expected: tuple, study_json: str, restart: bool,
+             log: Callable[[str], None] | None) -> list[int]:
+    """Create, verify (and repair) the result file; return the points still to run."""
+    storage.remove_aside(out)
+    if out.exists() and restart:
+        out.unlink()
+    if not out.exists():
+        storage.create(out, **layout)
+        return list(range(len(expected[1])))
+    found = storage.check(out, study_json, expected)
+    if not found.checksums and log:
+        log(f"{out}: written by an older blademodel without checksums, so its points cannot be verified; "
+            f"--restart recomputes them")
+    if not found.intact:
+        if log:
+            log(f"{out} is damaged: {found.describe()}; keeping the {len(found.done)} point(s) that verify "
+                f"and running the others again")
+        storage.rebuild(out, found.done, **layout)
+    done = set(found.done)
+    todo = [i for i in range(found.n_points) if i not in done]
+    if log and done:
+        if todo:
+            log(f"{out}: resuming: {len(done)} of {found.n_points} points already done, running the other "
+                f"{len(todo)} (--restart starts over)")
+        else:
+            log(f"{out}: all {found.n_points} points are already done; using them (--restart recomputes them)")
+    return todo
+
+
 def run_study(study: Study, out: str | Path, *, workers: int | None = None, scheduler: str | None = None,
-              restart: bool = False, progress: Callable[[int, int], None] | None = _bar) -> Path:
+              restart: bool = False, progress: Callable[[int, int], None] | None = _bar,
+              log: Callable[[str], None] | None = _say) -> Path:
     """Run every pending point of ``study`` into the NetCDF file ``out``.
+
+    The file is locked for the run (:class:`~blademodel.sweep.lock.ResultLock`);
+    an existing file is verified first (:func:`~blademodel.sweep.storage.check`):
+    a damaged one is rebuilt from its points that verify and the others are run
+    again.
 
     Parameters
     ----------
@@ -70,11 +111,25 @@ def run_study(study: Study, out: str | Path, *, workers: int | None = None, sche
         Discard an existing file and start again.
     progress : callable, optional
         ``progress(done, total)`` after every point.
+    log : callable, optional
+        ``log(message)`` for what the run finds in an existing file (resumed,
+        reused, repaired); default: printed to stderr.
 
     Returns
     -------
     Path
         ``out``.
+
+    Raises
+    ------
+    ResultFileError
+        If ``out`` is empty, unreadable or holds another study (``restart`` discards it).
+    ResultLockedError
+        If another process is writing ``out``.
+    WorkerLostError, SchedulerError
+        If a pool worker dies, or the Dask scheduler cannot be reached.
+    SweepInterrupted
+        On Ctrl-C (a :class:`KeyboardInterrupt`); the message says how to resume.
     """
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -86,37 +141,61 @@ def run_study(study: Study, out: str | Path, *, workers: int | None = None, sche
     for law in sorted(set(laws)):
         model = build_config(study.base, overrides[laws.index(law)]).build()
         n_state = max(n_state, len(model.coordinates) * 2 + sum(len(c.friction.states) for c in model.contacts))
-    if restart and out.exists():
-        out.unlink()
-    if not out.exists():
-        storage.create(out, study_json=study_json, fields=fields, values=values, laws=laws,
-                       periods=run["periods"], n_state=n_state,
-                       history=run["history_periods"] * run["steps_per_period"] + 1 if run["history_periods"] else 0)
-    todo = storage.pending(out, study_json)
-    total, done = len(values), len(values) - len(todo)
-    if progress:
-        progress(done, total)
-    if run["warm_start"]:
-        # Each point starts where the previous one (same law) ended: a chain, so serial.
-        for i in todo:
-            prev = storage.final_state(out, i - 1) if i > 0 and laws[i - 1] == laws[i] else None
-            storage.write_point(out, i, run_point(study.base, overrides[i], run, y0=prev))
-            done += 1
-            if progress:
-                progress(done, total)
-        return out
-    tasks = [(i, study.base, overrides[i], run) for i in todo]
-    for i, result in choose(workers, scheduler)(tasks):
-        storage.write_point(out, i, result)
-        done += 1
+    layout = dict(study_json=study_json, fields=fields, values=values, laws=laws, periods=run["periods"],
+                  n_state=n_state,
+                  history=run["history_periods"] * run["steps_per_period"] + 1 if run["history_periods"] else 0)
+    total = len(values)
+    with ResultLock(out):
+        todo = _prepare(out, layout, (fields, values, laws), study_json, restart, log)
+        done = total - len(todo)
         if progress:
             progress(done, total)
+        try:
+            if run["warm_start"]:
+                # Each point starts where the previous one (same law) ended: a chain, so serial.
+                for i in todo:
+                    prev = storage.final_state(out, i - 1) if i > 0 and laws[i - 1] == laws[i] else None
+                    storage.write_point(out, i, run_point(study.base, overrides[i], run, y0=prev))
+                    done += 1
+                    if progress:
+                        progress(done, total)
+                return out
+            tasks = [(i, study.base, overrides[i], run) for i in todo]
+            results = choose(workers, scheduler)(tasks)
+            try:
+                for i, result in results:
+                    storage.write_point(out, i, result)
+                    done += 1
+                    if progress:
+                        progress(done, total)
+            finally:   # stops the executor's workers now if this loop ended early
+                close = getattr(results, "close", None)
+                if close is not None:
+                    close()
+        except KeyboardInterrupt:
+            if sys.stderr.isatty():
+                print(file=sys.stderr)   # end the progress bar's line
+            raise SweepInterrupted(f"interrupted: {done} of {total} points are saved in {out}; run the same "
+                                   f"command again to resume") from None
     return out
 
 
 def open_result(path: str | Path):
-    """The result file as an :class:`xarray.Dataset`, with the study in ``attrs``."""
+    """The result file as an :class:`xarray.Dataset`, with the study in ``attrs``.
+
+    The file is verified first (:func:`~blademodel.sweep.storage.check`), so a
+    damaged file never passes its zeros off as data.
+
+    Raises
+    ------
+    ResultFileError
+        If the file is empty, unreadable, cut short or a done point fails its checksum.
+    """
     import xarray as xr
+    found = storage.check(path)
+    if not found.intact:
+        raise ResultFileError(f"{path} is damaged: {found.describe()}; run its sweep again to recompute "
+                              f"the damaged points")
     ds = xr.load_dataset(path)
     for name in ("law", "error"):  # character arrays in the classic format: back to str
         if ds[name].dtype.kind == "S":

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any, Literal, Optional
 
@@ -9,6 +10,10 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from ..components.friction import registry
+
+
+#: What a study name may be: it names the result file and the figures.
+NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}")
 
 
 class _Strict(BaseModel):
@@ -96,6 +101,15 @@ class Study(_Strict):
     plot: Literal["bifurcation", "reduction", "map", "cases"] = "bifurcation"
     quick: dict = Field(default_factory=lambda: {"num": 8, "transient": 40, "periods": 16})
     source: Optional[str] = Field(None, exclude=True)
+
+    @field_validator("name")
+    @classmethod
+    def _plain_name(cls, v: str) -> str:
+        # The name becomes file names (out/<name>.nc, figures): it must stay inside the output folder.
+        if not NAME_PATTERN.fullmatch(v) or ".." in v:
+            raise ValueError("a study name is a plain file name: letters, digits, '_', '-' and '.', starting "
+                             "with a letter or digit, without '/' or '..'")
+        return v
 
     @field_validator("laws")
     @classmethod
