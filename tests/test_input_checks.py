@@ -65,3 +65,136 @@ def test_binary_model_file_names_the_file(capsys, tmp_path):
     code, out, err = _main(capsys, ["equations", str(path)])
     assert code == 2 and out == ""
     assert f"error: {path}: not a text file" in err
+
+
+# --- runs whose P_d is undefined are kept --------------------------------------------------
+RUN = ["--transient", "2", "--periods", "2", "--steps-per-period", "400"]
+
+
+def _strict_json(text: str) -> dict:
+    """Parse JSON as the standard has it: ``NaN`` and ``Infinity`` are errors."""
+    def refuse(name):
+        raise ValueError(f"invalid JSON constant {name}")
+    return json.loads(text, parse_constant=refuse)
+
+
+@pytest.mark.parametrize("setting, reason", [
+    ("F0=0", "P0 = 0.0: the reference system does not move"),           # no force at all
+    ("m=1e300", "P0 = 0.0: the reference system does not move"),         # a motion below float64's range
+])
+def test_undefined_pd_keeps_the_run_and_says_why(capsys, tmp_path, setting, reason):
+    out = tmp_path / "r.npz"
+    code, stdout, err = _main(capsys, ["simulate", PAIR, *RUN, "--set", setting, "--json", "--out", str(out)])
+    assert code == 0, err
+    rep = _strict_json(stdout)
+    assert rep["Pd"] is None and reason in rep["undefined"]["Pd"] and rep["status"] == "done"
+    assert len(rep["poincare"]["X1"]) == 2
+    import numpy as np
+    saved = np.load(out)
+    assert saved["y"].shape == (2 * 400 + 1, 9) and _strict_json(str(saved["report"])) == rep
+    code, stdout, _ = _main(capsys, ["simulate", PAIR, *RUN, "--set", setting])
+    assert code == 0 and f"P_d: undefined: {reason}" in stdout
+
+
+def test_json_of_a_result_with_overflowing_mean_squares_is_valid_json(capsys):
+    # F0 = 1e200: the states stay finite (x ~ 1e193) but their squares overflow, so P = P0 = inf
+    # and P_d = inf / inf used to be printed as NaN.
+    code, stdout, err = _main(capsys, ["simulate", PAIR, *RUN, "--set", "F0=1e200", "--json"])
+    assert code == 0, err
+    assert "NaN" not in stdout and "Infinity" not in stdout
+    rep = _strict_json(stdout)
+    assert rep["Pd"] is None and "P = inf, P0 = inf" in rep["undefined"]["Pd"]
+    assert "RuntimeWarning" not in err
+
+
+def test_finite_json_replaces_every_non_finite_number_and_lists_it():
+    import numpy as np
+    from blademodel.commands.jsonout import dumps
+    rep = {"a": float("nan"), "b": {"c": [1.0, float("inf"), np.float64(-np.inf)]}, "d": np.array([2.0, np.nan]),
+           "e": np.int64(3), "Pd": None}
+    out = _strict_json(dumps(rep, {"Pd": "no contacts"}))
+    assert out == {"a": None, "b": {"c": [1.0, None, None]}, "d": [2.0, None], "e": 3, "Pd": None,
+                   "undefined": {"Pd": "no contacts", "a": "not a finite number (nan)",
+                                 "b.c.1": "not a finite number (inf)", "b.c.2": "not a finite number (-inf)",
+                                 "d.1": "not a finite number (nan)"}}
+    assert "undefined" not in _strict_json(dumps({"x": 1.5}))
+
+
+# --- --out is checked before anything is computed ---------------------------------------------
+
+@pytest.fixture
+def no_run(monkeypatch):
+    """Make ``simulate`` fail the test if the command gets as far as running."""
+    import blademodel.commands.simulate as cmd
+
+    def ran(*args, **kwargs):
+        raise AssertionError("the command started the run before refusing its input")
+    monkeypatch.setattr(cmd, "simulate", ran)
+
+
+def _read_only_folder(tmp_path) -> Path:
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o555)
+    import os
+    if not os.access(folder, os.W_OK):
+        return folder
+    if Path("/sys").is_dir():  # root writes anywhere chmod forbids; sysfs refuses new files even to root
+        return Path("/sys")
+    pytest.skip("no read-only folder available")
+
+
+@pytest.mark.parametrize("case", ["missing folder", "read-only folder", "wrong suffix", "a folder", "under a file"])
+def test_bad_out_is_refused_before_the_run_with_exit_2(capsys, tmp_path, no_run, case):
+    (tmp_path / "plain").write_text("x")
+    out, needle = {
+        "missing folder": (tmp_path / "nope" / "r.npz", "does not exist; create it first"),
+        "read-only folder": (_read_only_folder(tmp_path) / "r.npz", "cannot write in folder"),
+        "wrong suffix": (tmp_path / "x.txt", "the result is a NumPy .npz archive; give a file name ending in .npz"),
+        "a folder": (tmp_path, "give a file name ending in .npz"),
+        "under a file": (tmp_path / "plain" / "r.npz", "is not a folder"),
+    }[case]
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    code, stdout, err = _main(capsys, ["simulate", PAIR, "--out", str(out)])
+    assert code == 2 and stdout == ""
+    assert err.startswith(f"error: --out '{out}': ") and needle in err and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before   # nothing written (no x.txt.npz)
+
+
+# --- run length and memory limits, checked up front ------------------------------------------
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--transient", str(10 ** 23)], "--transient 100000000000000000000000, --periods 100, --steps-per-period 1000: "
+                                     "1e+26 RK4 steps in all, more than a run takes (2**53"),
+    (["--steps-per-period", str(10 ** 7)], "the run would keep 1000000001 records of 9 states (96.9 GiB), more than "
+                                           "the limit of 2 GiB ($BLADEMODEL_MAX_RECORD_BYTES); record every 49"),
+    (["--steps-per-period", str(10 ** 8), "--record-every", str(10 ** 8)],
+     "--steps-per-period 100000000: one period of the P_d reference run"),
+])
+def test_run_limits_are_checked_before_the_run(capsys, no_run, argv, needle):
+    code, stdout, err = _main(capsys, ["simulate", PAIR, *argv])
+    assert code == 2 and stdout == ""
+    assert needle in err and "Traceback" not in err
+
+
+def test_run_limits_of_the_python_api_come_before_compiling(monkeypatch):
+    import importlib
+    sim = importlib.import_module("blademodel.numeric.simulate")   # the package exports a function of that name
+    from blademodel.numeric.limits import RunTooLargeError
+
+    def compiled(*args, **kwargs):
+        raise AssertionError("the kernel was set up before the settings were checked")
+    monkeypatch.setattr(sim, "make_integrator", compiled)
+    model = BladePair().build()
+    with pytest.raises(RunTooLargeError, match=r"1e\+23 RK4 steps in all"):
+        sim.simulate(model, transient=1e23, periods=1, steps_per_period=1)
+    with pytest.raises(ValueError, match="periods = inf must be an integer >= 1"):
+        sim.simulate(model, periods=float("inf"))
+    with pytest.raises(ValueError, match="record_every = True must be an integer >= 1"):
+        sim.simulate(model, record_every=True)
+    monkeypatch.setenv("BLADEMODEL_MAX_RECORD_BYTES", "1e6")
+    with pytest.raises(RunTooLargeError, match=r"more than the limit of 977 KiB"):
+        sim.simulate(model, periods=100)
+    monkeypatch.setenv("BLADEMODEL_MAX_RECORD_BYTES", "lots")
+    with pytest.raises(ValueError, match="BLADEMODEL_MAX_RECORD_BYTES = 'lots' must be a positive number"):
+        sim.simulate(model, periods=1)
