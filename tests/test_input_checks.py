@@ -198,3 +198,73 @@ def test_run_limits_of_the_python_api_come_before_compiling(monkeypatch):
     monkeypatch.setenv("BLADEMODEL_MAX_RECORD_BYTES", "lots")
     with pytest.raises(ValueError, match="BLADEMODEL_MAX_RECORD_BYTES = 'lots' must be a positive number"):
         sim.simulate(model, periods=1)
+
+
+# --- the integrators' advance validates its arguments ------------------------------------------
+
+def _bad_advance_calls(integ, good_mode, bad_modes):
+    """``(kwargs, message)`` pairs of ``advance`` calls the kernel must never see."""
+    import numpy as np
+    n = integ.n_state
+    y = integ.initial_state()
+    calls = [(dict(y=y, mode=m), msg) for m, msg in bad_modes]
+    calls += [
+        (dict(y=y[:-1].copy(), mode=good_mode), f"y must be a writable C-contiguous float64 array of shape ({n},)"),
+        (dict(y=np.zeros(n, dtype=np.float32), mode=good_mode), "got a float32 array"),
+        (dict(y=list(y), mode=good_mode), "got list"),
+        (dict(y=y, mode=good_mode, end_period=-1), "end_period = -1 must be an integer >= 0"),
+        (dict(y=y, mode=good_mode, record_every=0), "record_every = 0 must be an integer >= 1"),
+        (dict(y=y, mode=good_mode, poincare=np.empty((1, n))), f"poincare must be a writable C-contiguous float64 "
+                                                               f"array of shape (>= 2, {n})"),
+        (dict(y=y, mode=good_mode, counters=np.zeros(3, dtype=np.int64)), "counters must be"),
+        (dict(y=y, mode=good_mode, record=integ.record_buffer(5)[:2]), "record must be a tuple of 3 arrays"),
+        (dict(y=y, mode=good_mode, record=(np.empty(5), np.empty((4, n)), integ.record_buffer(5)[2])),
+         "record[1] must be"),
+    ]
+    return calls
+
+
+def _assert_refused(integ, calls):
+    import numpy as np
+    for kwargs, msg in calls:
+        y0 = kwargs["y"].copy() if isinstance(kwargs["y"], np.ndarray) else None
+        args = dict(start_period=0, end_period=2)
+        args.update({k: v for k, v in kwargs.items() if k in ("start_period", "end_period")})
+        rest = {k: v for k, v in kwargs.items() if k not in ("y", "mode", "start_period", "end_period")}
+        with pytest.raises(ValueError, match=r"^advance: ") as info:
+            integ.advance(kwargs["y"], kwargs["mode"], args["start_period"], args["end_period"], **rest)
+        assert msg in str(info.value), (msg, str(info.value))
+        if y0 is not None:
+            assert np.array_equal(kwargs["y"], y0)   # nothing was integrated
+
+
+def test_hybrid_integrator_advance_refuses_bad_arguments():
+    import numpy as np
+    from blademodel.numeric import HybridIntegrator
+    integ = HybridIntegrator(BladePair(friction="bilinear").build(), steps_per_period=400)
+    modes = integ.mode_names
+    bad = [(len(modes), f"mode = {len(modes)} is not a mode number (0..{len(modes) - 1}: {', '.join(modes)})"),
+           (-1, "mode = -1 is not a mode number"), (True, "mode = True is not a mode number"),
+           (np.array([0, 0]), "is not a mode number")]
+    _assert_refused(integ, _bad_advance_calls(integ, 0, bad))
+    y = integ.initial_state()               # a good call still runs
+    status, mode, t = integ.advance(y, integ.mode_of(y), 0, 2)
+    assert status == 0 and t == pytest.approx(2 * integ.period)
+
+
+def test_contact_integrator_advance_refuses_bad_arguments():
+    import numpy as np
+    from blademodel.numeric import ContactIntegrator
+    integ = ContactIntegrator(BladedDisk(blades=4, engine_order=1).build())
+    modes = integ.meta["contact_modes"][0]
+    good = np.zeros(4, dtype=np.int64)
+    bad = [(np.array([0, 0, len(modes), 0]), f"mode[2] = {len(modes)} is not a mode of contact "),
+           (np.array([0, -1, 0, 0]), "mode[1] = -1 is not a mode of contact"),
+           (np.zeros(3, dtype=np.int64), "mode must hold one integer per contact (4)"),
+           (np.zeros(4), "mode must hold one integer per contact (4)")]
+    calls = _bad_advance_calls(integ, good, bad)
+    calls.append((dict(y=integ.initial_state(), mode=good, stats=np.zeros(0)), "stats must be"))
+    _assert_refused(integ, calls)
+    y = integ.initial_state()
+    status, cm, t = integ.advance(y, integ.mode_of(y), 0, 2)
+    assert status == 0 and t == pytest.approx(2 * integ.period)
