@@ -268,3 +268,126 @@ def test_contact_integrator_advance_refuses_bad_arguments():
     y = integ.initial_state()
     status, cm, t = integ.advance(y, integ.mode_of(y), 0, 2)
     assert status == 0 and t == pytest.approx(2 * integ.period)
+
+
+# --- friction laws are checked against the interface before any code is generated -------------
+from dataclasses import dataclass, field  # noqa: E402
+
+import sympy as sp  # noqa: E402
+
+from blademodel.components.friction import Candidate, FrictionLaw, Guard  # noqa: E402
+from blademodel.components.friction.validation import FrictionLawError, check_law  # noqa: E402
+from blademodel.components.parameter import Number, as_param  # noqa: E402
+
+
+@dataclass(frozen=True)
+class SlideLaw(FrictionLaw):
+    """A well-formed one-mode law (kinetic friction only); the broken laws below each change one thing."""
+
+    mu: Number = 0.5
+    _p: dict = field(init=False, repr=False, compare=False)
+    modes = ("slide",)
+
+    def __post_init__(self):
+        object.__setattr__(self, "_p", {"mu": as_param(self.mu, "mu", field="friction: mu", minimum=0.0)})
+
+    def parameters(self):
+        return dict(self._p)
+
+    def force(self, mode, ctx):
+        return ctx.params["mu"] * ctx.N * sp.sign(ctx.v)
+
+    def guards(self, mode, ctx):
+        return [Guard(ctx.v, 0, [Candidate("slide")], "reverse")]
+
+    def entry(self, ctx):
+        return [Candidate("slide")]
+
+
+class NoModesLaw(SlideLaw):
+    modes = ()
+
+    def entry(self, ctx):
+        return [Candidate("open")]
+
+
+class ForceNoneLaw(SlideLaw):
+    def force(self, mode, ctx):
+        return None
+
+
+class UnknownModeLaw(SlideLaw):
+    def guards(self, mode, ctx):
+        return [Guard(ctx.v, 0, [Candidate("stick")], "v=0")]
+
+
+class UnknownStateLaw(SlideLaw):
+    def exit_reset(self, ctx):
+        return {"z": sp.Integer(0)}
+
+
+class BadDirectionLaw(SlideLaw):
+    def guards(self, mode, ctx):
+        return [Guard(ctx.v, 2, [Candidate("slide")])]
+
+
+class RaisingLaw(SlideLaw):
+    def rates(self, mode, ctx):
+        return {"z": ctx.states["z"]}
+
+
+class NoGuardsLaw(SlideLaw):
+    def guards(self, mode, ctx):
+        pass
+
+
+class AbstractLaw(FrictionLaw):
+    modes = ("slide",)
+
+    def parameters(self):
+        return {}
+
+
+BROKEN = {
+    "NoModesLaw": "modes = (): a law needs at least one mode of the closed contact (e.g. modes = ('slip',)); "
+                  "'open' is added by the contact",
+    "ForceNoneLaw": "force('slide', ctx) returned None; expected a SymPy expression, a number or STICK",
+    "UnknownModeLaw": "guards('slide', ctx)[0].candidates[0] names mode 'stick', which is not among its modes "
+                      "('open', 'slide')",
+    "UnknownStateLaw": "exit_reset(ctx) names state 'z', which is not among its states ()",
+    "BadDirectionLaw": "guards('slide', ctx)[0].direction = 2 must be -1, 0 or +1",
+    "RaisingLaw": "rates('slide', ctx) raised KeyError: 'z'",
+    "NoGuardsLaw": "guards('slide', ctx) returned None; expected a list of Guard",
+}
+
+
+def test_a_well_formed_law_passes_and_the_built_in_laws_too():
+    assert isinstance(check_law(SlideLaw()), SlideLaw)
+    for law in ("coulomb", "bilinear", "none", "iwan"):
+        BladePair(friction=law).build()
+
+
+@pytest.mark.parametrize("name", sorted(BROKEN))
+def test_a_broken_law_is_refused_naming_the_law_and_what_is_wrong(name):
+    with pytest.raises(FrictionLawError) as info:
+        BladePair(friction=f"test_input_checks:{name}").build()
+    assert str(info.value) == f"contact c: friction law test_input_checks:{name}: {BROKEN[name]}"
+
+
+def test_an_abstract_law_class_is_refused_by_name():
+    with pytest.raises(ValueError, match=r"test_input_checks:AbstractLaw.*does not implement entry, force, guards"):
+        BladePair(friction="test_input_checks:AbstractLaw")
+
+
+@pytest.mark.parametrize("name", ["NoModesLaw", "ForceNoneLaw"])
+def test_cli_refuses_a_broken_law_before_writing_to_the_kernel_cache(capsys, tmp_path, monkeypatch, name):
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("BLADEMODEL_CACHE_DIR", str(cache))
+    path = tmp_path / "p.yaml"
+    path.write_text(f"model: blade_pair\nfriction: test_input_checks:{name}\n")
+    for command in (["simulate", str(path), *RUN], ["simulate", str(path), *RUN, "--kernel", "contact"],
+                    ["equations", str(path)]):
+        code, out, err = _main(capsys, command)
+        assert code == 2 and out == ""
+        assert err == f"error: {path}: contact c: friction law test_input_checks:{name}: {BROKEN[name]}\n"
+    assert not cache.exists() or not any(cache.iterdir())

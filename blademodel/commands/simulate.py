@@ -10,7 +10,7 @@ import numpy as np
 
 from ..analysis import mean_square, periodicity_label, vibration_reduction
 from ..numeric.mean_square import mean_square_run, without_contacts
-from ..config import apply_overrides, load_config
+from ..config import ConfigError, apply_overrides, load_config
 from ..numeric import SimulationError, simulate
 from ..numeric.limits import check_run_length
 from . import jsonout
@@ -121,7 +121,10 @@ def _save(path: str, result, report_json: str) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the simulation; return the exit code."""
     config = apply_overrides(load_config(args.model), parse_overrides(args.overrides))
-    model = config.build()
+    try:
+        model = config.build()
+    except ValueError as e:
+        raise ConfigError(f"{args.model}: {e}", path=str(args.model)) from None
     _check_up_front(model, args)
     try:
         result = simulate(model, periods=args.periods, transient=args.transient,
