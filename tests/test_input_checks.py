@@ -192,6 +192,11 @@ def test_run_limits_of_the_python_api_come_before_compiling(monkeypatch):
         sim.simulate(model, periods=float("inf"))
     with pytest.raises(ValueError, match="record_every = True must be an integer >= 1"):
         sim.simulate(model, record_every=True)
+    from blademodel.numeric.integrator import check_settings
+    with pytest.raises(ValueError, match="steps_per_period = inf must be an integer >= 1"):
+        check_settings(float("inf"), 1e-10, 100)
+    with pytest.raises(ValueError, match="event_tol = nan must be a positive number"):
+        check_settings(1000, float("nan"), 100)
     monkeypatch.setenv("BLADEMODEL_MAX_RECORD_BYTES", "1e6")
     with pytest.raises(RunTooLargeError, match=r"more than the limit of 977 KiB"):
         sim.simulate(model, periods=100)

@@ -24,9 +24,9 @@ def excitation_period(model: Model) -> float:
 
 def check_settings(steps_per_period, event_tol, max_events_per_step) -> None:
     """Validate the settings every kernel shares; raise ``ValueError`` naming the bad one."""
+    from .limits import check_integer
     for name, value in (("steps_per_period", steps_per_period), ("max_events_per_step", max_events_per_step)):
-        if int(value) != value or value < 1:
-            raise ValueError(f"{name} = {value!r} must be an integer >= 1")
+        check_integer(name, value, 1)   # also refuses inf, NaN and booleans (int(inf) would raise OverflowError)
     if not (event_tol > 0 and math.isfinite(event_tol)):
         raise ValueError(f"event_tol = {event_tol!r} must be a positive number")
 
