@@ -396,3 +396,18 @@ def test_cli_refuses_a_broken_law_before_writing_to_the_kernel_cache(capsys, tmp
         assert code == 2 and out == ""
         assert err == f"error: {path}: contact c: friction law test_input_checks:{name}: {BROKEN[name]}\n"
     assert not cache.exists() or not any(cache.iterdir())
+
+
+@pytest.mark.parametrize("case", ["read-only folder", "wrong suffix"])
+def test_sweep_out_is_checked_before_any_point(capsys, tmp_path, monkeypatch, case):
+    import blademodel.commands.sweep as cmd
+
+    def ran(*args, **kwargs):
+        raise AssertionError("the sweep started before its --out was checked")
+    monkeypatch.setattr(cmd, "run_study", ran)
+    out, needle = {"read-only folder": (_read_only_folder(tmp_path) / "new" / "s.nc", "cannot write in folder"),
+                   "wrong suffix": (tmp_path / "s.txt", "the result is a NetCDF file; give a file name ending in .nc"),
+                   }[case]
+    code, stdout, err = _main(capsys, ["sweep", str(ROOT / "models" / "studies" / "fig06.yaml"), "--out", str(out)])
+    assert code == 2 and stdout == "" and needle in err and "Traceback" not in err
+    assert not out.exists()

@@ -38,7 +38,8 @@ def check_writable_folder(folder: Path, label: str) -> None:
         raise ValueError(f"{label}: cannot write in folder {str(folder)!r}: {e.strerror or e}") from None
 
 
-def check_output_file(path: str | os.PathLike, suffix: str, *, option: str = "--out", what: str = "file") -> Path:
+def check_output_file(path: str | os.PathLike, suffix: str, *, option: str = "--out", what: str = "file",
+                      make_folders: bool = False) -> Path:
     """Check an output file name before anything is computed.
 
     Parameters
@@ -51,6 +52,8 @@ def check_output_file(path: str | os.PathLike, suffix: str, *, option: str = "--
         The option that gave the path, for messages.
     what : str
         What the file holds, for messages (``"NumPy .npz archive"``).
+    make_folders : bool
+        The command creates missing folders: check the nearest existing one instead.
 
     Returns
     -------
@@ -59,8 +62,8 @@ def check_output_file(path: str | os.PathLike, suffix: str, *, option: str = "--
     Raises
     ------
     ValueError
-        If the suffix differs, the path is a folder, its folder is missing or not
-        writable, or an existing file there cannot be replaced.
+        If the suffix differs, the path is a folder, its folder is missing (unless
+        ``make_folders``) or not writable, or an existing file there cannot be replaced.
     """
     p = Path(path)
     label = f"{option} {str(path)!r}"
@@ -68,7 +71,11 @@ def check_output_file(path: str | os.PathLike, suffix: str, *, option: str = "--
         raise ValueError(f"{label}: the result is a {what}; give a file name ending in {suffix}")
     if p.is_dir():
         raise ValueError(f"{label}: is a folder; give a file name ending in {suffix}")
-    check_writable_folder(p.parent, label)
+    folder = p.parent
+    if make_folders:
+        while not folder.exists() and folder != folder.parent:
+            folder = folder.parent
+    check_writable_folder(folder, label)
     if p.exists() and not os.access(p, os.W_OK):
         raise ValueError(f"{label}: the existing file cannot be replaced (no write permission)")
     return p

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from ..sweep import load_study, run_study
+from .output import check_output_file
 
 
 def add_run_arguments(p: argparse.ArgumentParser) -> None:
@@ -32,6 +33,7 @@ def register(subparsers) -> argparse.ArgumentParser:
 
 def execute(study, out: Path, args) -> list[Path]:
     """Run ``study`` into ``out`` and plot it; returns the figure paths."""
+    check_output_file(out, ".nc", what="NetCDF file", make_folders=True)  # before any point is computed
     if args.quick:
         study = study.quick_version()
     if getattr(args, "warm_start", False):
