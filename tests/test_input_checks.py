@@ -346,6 +346,18 @@ class NoGuardsLaw(SlideLaw):
         pass
 
 
+class GeneratorLaw(SlideLaw):
+    """Iterables other than lists are fine: the symbolic layer takes ``list(...)`` of them."""
+
+    def guards(self, mode, ctx):
+        yield Guard(ctx.v, 0, (Candidate("slide"),), "reverse")
+
+
+class NoEntryLaw(SlideLaw):
+    def entry(self, ctx):
+        return []
+
+
 class AbstractLaw(FrictionLaw):
     modes = ("slide",)
 
@@ -363,11 +375,13 @@ BROKEN = {
     "BadDirectionLaw": "guards('slide', ctx)[0].direction = 2 must be -1, 0 or +1",
     "RaisingLaw": "rates('slide', ctx) raised KeyError: 'z'",
     "NoGuardsLaw": "guards('slide', ctx) returned None; expected a list of Guard",
+    "NoEntryLaw": "entry(ctx) returned no Candidate; expected at least one (the last unconditional)",
 }
 
 
 def test_a_well_formed_law_passes_and_the_built_in_laws_too():
     assert isinstance(check_law(SlideLaw()), SlideLaw)
+    assert isinstance(check_law(GeneratorLaw()), GeneratorLaw)
     for law in ("coulomb", "bilinear", "none", "iwan"):
         BladePair(friction=law).build()
 

@@ -13,7 +13,7 @@ message that names the law, the method and the offending value.
 from __future__ import annotations
 
 import inspect
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping
 from typing import Any
 
 from .._sympy import sp
@@ -125,9 +125,17 @@ class _Checker:
             if not _is_expr(v):
                 raise self.fail(f"{where}[{k!r}] = {_short(v)}; expected a SymPy expression or a number")
 
+    def items(self, value: Any, where: str, what: str, nonempty: bool) -> list:
+        """``value`` as a list, if it is an iterable of items (a list, tuple or generator)."""
+        if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
+            raise self.fail(f"{where} returned {_short(value)}; expected a {'non-empty ' * nonempty}list of {what}")
+        out = list(value)
+        if nonempty and not out:
+            raise self.fail(f"{where} returned no {what}; expected at least one (the last unconditional)")
+        return out
+
     def candidates(self, value: Any, where: str, modes: tuple[str, ...], states: tuple[str, ...]) -> None:
-        if not isinstance(value, Sequence) or isinstance(value, str) or not value:
-            raise self.fail(f"{where} = {_short(value)}; expected a non-empty list of Candidate")
+        value = self.items(value, where, "Candidate", nonempty=True)
         for i, c in enumerate(value):
             if not isinstance(c, Candidate):
                 raise self.fail(f"{where}[{i}] = {_short(c)} is not a Candidate")
@@ -150,9 +158,7 @@ class _Checker:
                 raise self.fail(f"force({mode!r}, ctx) returned {_short(force)}; expected a SymPy expression, "
                                 f"a number or STICK")
             self.state_map(self.call("rates", mode, ctx), f"rates({mode!r}, ctx)", states)
-            guards = self.call("guards", mode, ctx)
-            if not isinstance(guards, Sequence) or isinstance(guards, str):
-                raise self.fail(f"guards({mode!r}, ctx) returned {_short(guards)}; expected a list of Guard")
+            guards = self.items(self.call("guards", mode, ctx), f"guards({mode!r}, ctx)", "Guard", nonempty=False)
             for i, g in enumerate(guards):
                 where = f"guards({mode!r}, ctx)[{i}]"
                 if not isinstance(g, Guard):
