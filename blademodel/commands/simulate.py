@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import argparse
-import json
+import math
 import sys
 
 import numpy as np
 
 from ..analysis import mean_square, periodicity_label, vibration_reduction
 from ..numeric.mean_square import mean_square_run, without_contacts
-from ..config import apply_overrides, load_config
+from ..config import ConfigError, apply_overrides, load_config
 from ..numeric import SimulationError, simulate
+from ..numeric.limits import check_run_length
+from . import jsonout
 from .common import add_model_arguments, parse_overrides
+from .output import check_output_file
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -43,15 +46,29 @@ def _progress(done: int, total: int) -> None:
         print(f"\r[{bar:<30}] {done}/{total} periods", end="" if done < total else "\n", file=sys.stderr)
 
 
-def _vibration_reduction(model, result, args) -> float | None:
-    """``P_d`` in percent against the same model without contacts (None without contacts)."""
+def _vibration_reduction(model, result, args) -> tuple[float | None, str | None]:
+    """``(P_d, None)`` in percent against the same model without contacts, or ``(None, reason)``.
+
+    ``P_d = (P0 - P) / P0`` is undefined without contacts, when the reference system
+    does not move (``P0 = 0``: no force, or a motion below float64's range) or when
+    a mean square overflows; the run is kept and the reason reported instead.
+    """
     if not model.contacts:
-        return None
+        return None, "the model has no contacts (P_d compares it with itself without contacts)"
     names = model.masses[0].coordinates
-    P = mean_square(result.y, result.state_names, names)
-    P0 = mean_square_run(without_contacts(model), transient=args.transient, periods=args.periods,
-                         steps_per_period=args.steps_per_period, event_tol=args.event_tol, names=names)
-    return vibration_reduction(P, P0)
+    try:
+        with np.errstate(over="ignore"):  # an overflow is reported below as an undefined P_d
+            P = mean_square(result.y, result.state_names, names)
+            P0 = mean_square_run(without_contacts(model), transient=args.transient, periods=args.periods,
+                                 steps_per_period=args.steps_per_period, event_tol=args.event_tol, names=names)
+    except RuntimeError as e:   # the reference run itself failed
+        return None, f"the reference run without contacts failed: {e}"
+    if not (math.isfinite(P) and math.isfinite(P0)):
+        return None, f"P = {P:g}, P0 = {P0:g}: a mean square of the displacements is not finite"
+    try:
+        return vibration_reduction(P, P0), None
+    except ValueError as e:
+        return None, f"{e} (P_d = (P0 - P) / P0 needs P0 > 0)"
 
 
 def report(config, model, result) -> dict:
@@ -74,10 +91,41 @@ def report(config, model, result) -> dict:
     return out
 
 
+def _check_up_front(model, args) -> None:
+    """Refuse bad settings and a bad ``--out`` before the kernel is built or a step is taken."""
+    if args.out:
+        check_output_file(args.out, ".npz", what="NumPy .npz archive")
+    try:
+        check_run_length(model, periods=args.periods, transient=args.transient,
+                         steps_per_period=args.steps_per_period, record_every=args.record_every,
+                         reference=bool(model.contacts))
+    except ValueError as e:  # name the options as the user typed them
+        text = str(e)
+        for name in ("steps_per_period", "record_every", "transient", "periods"):
+            text = text.replace(f"{name} = ", f"--{name.replace('_', '-')} ")
+        raise type(e)(text) from None
+
+
+def _save(path: str, result, report_json: str) -> None:
+    extra = {}
+    if result.contacts is not None:   # per-contact kernel: each contact's mode and forces per record
+        extra = {"contact_names": np.array(result.contacts["names"]), "contact_modes": result.contacts["modes"],
+                 "contact_mode_names": np.array([",".join(m) for m in result.contacts["mode_names"]])}
+        if "N" in result.contacts:
+            extra.update(contact_N=result.contacts["N"], contact_f=result.contacts["f"])
+    np.savez_compressed(path, t=result.t, y=result.y, mode=result.mode, poincare=result.poincare,
+                        poincare_t=result.poincare_t, state_names=np.array(result.state_names),
+                        mode_names=np.array(result.mode_names), report=report_json, **extra)
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the simulation; return the exit code."""
     config = apply_overrides(load_config(args.model), parse_overrides(args.overrides))
-    model = config.build()
+    try:
+        model = config.build()
+    except ValueError as e:
+        raise ConfigError(f"{args.model}: {e}", path=str(args.model)) from None
+    _check_up_front(model, args)
     try:
         result = simulate(model, periods=args.periods, transient=args.transient,
                           steps_per_period=args.steps_per_period, event_tol=args.event_tol,
@@ -87,23 +135,22 @@ def run(args: argparse.Namespace) -> int:
         print(f"error: {e}", file=sys.stderr)
         return 1
     rep = report(config, model, result)
-    rep["Pd"] = _vibration_reduction(model, result, args)
+    rep["Pd"], why = _vibration_reduction(model, result, args)
+    text = jsonout.dumps(rep, {"Pd": why} if why else None)
     if args.out:
-        extra = {}
-        if result.contacts is not None:   # per-contact kernel: each contact's mode and forces per record
-            extra = {"contact_names": np.array(result.contacts["names"]), "contact_modes": result.contacts["modes"],
-                     "contact_mode_names": np.array([",".join(m) for m in result.contacts["mode_names"]])}
-            if "N" in result.contacts:
-                extra.update(contact_N=result.contacts["N"], contact_f=result.contacts["f"])
-        np.savez_compressed(args.out, t=result.t, y=result.y, mode=result.mode, poincare=result.poincare,
-                            poincare_t=result.poincare_t, state_names=np.array(result.state_names),
-                            mode_names=np.array(result.mode_names), report=json.dumps(rep), **extra)
+        try:
+            _save(args.out, result, text)
+        except OSError as e:
+            print(f"error: --out {args.out!r}: cannot save the result: {e.strerror or e}", file=sys.stderr)
+            return 1
     if args.json:
-        print(json.dumps(rep))
+        print(text)
     else:
         print(f"{model.name}: {rep['periodicity']} after {args.transient} periods "
               f"({result.counters['events']} events, {result.counters['steps']} steps)")
         print("final state: " + ", ".join(f"{k}={v:.6g}" for k, v in result.final.items()))
+        if why and model.contacts:
+            print(f"P_d: undefined: {why}")
         if args.out:
             print(f"saved {args.out}")
     return 0

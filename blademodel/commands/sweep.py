@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from ..sweep import load_study, run_study, storage
+from .output import check_output_file
 
 
 def add_run_arguments(p: argparse.ArgumentParser) -> None:
@@ -65,6 +66,7 @@ def execute(study, out: Path, args) -> tuple[list[Path], bool]:
     ok : bool
         False if every point failed (the failures are summed up on stderr, nothing is plotted).
     """
+    check_output_file(out, ".nc", what="NetCDF file", make_folders=True)  # before any point is computed
     if args.quick:
         study = study.quick_version()
     if getattr(args, "warm_start", False):

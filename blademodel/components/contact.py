@@ -8,6 +8,7 @@ from ._sympy import sp
 
 from .friction.base import FrictionLaw
 from .friction.none import NoFriction
+from .friction.validation import FrictionLawError, check_law
 from .mass import Mass
 from .parameter import Number, Param, as_param
 
@@ -59,6 +60,10 @@ class Contact:
             raise ValueError(f"contact name {self.name!r} must be an identifier")
         if not isinstance(self.friction, FrictionLaw):
             raise TypeError(f"contact {self.name}: friction = {self.friction!r} is not a FrictionLaw")
+        try:
+            check_law(self.friction)
+        except FrictionLawError as e:
+            raise FrictionLawError(f"contact {self.name}: {e}") from None
         if self.body2 is not None and self.body2.name == self.body1.name:
             raise ValueError(f"contact {self.name}: a body cannot touch itself ({self.body1.name})")
         n = self.name

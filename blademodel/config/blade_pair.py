@@ -5,17 +5,17 @@ from __future__ import annotations
 import math
 from typing import Any, Literal, Optional
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from ..components import Contact, Damper, HarmonicForce, Mass, Param, Spring
 from ..components.friction import registry
 from ..model import Model
 from .friction_law import check_friction_options, make_friction_law
+from .strict import StrictConfig
 
 
 
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
+_Strict = StrictConfig   # the name the config modules import
 
 
 class BladeValues(_Strict):

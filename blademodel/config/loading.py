@@ -150,6 +150,19 @@ def config_from_data(data: Any, *, source: str = "<config>", root: Optional[yaml
         raise _validation_error(e, data, source, root) from None
 
 
+def _decode(raw: bytes, source: str) -> str:
+    """The text of a config file: UTF-8 without NUL bytes, else a :class:`ConfigError` naming the file."""
+    if b"\x00" in raw[:8192]:
+        raise ConfigError(f"{source}: not a text file (it holds NUL bytes): a config is YAML text "
+                          f"in UTF-8", path=source)
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = raw[:e.start].count(b"\n") + 1
+        raise ConfigError(f"{source}:{line}: not UTF-8 text (byte 0x{raw[e.start]:02x} at offset {e.start}: "
+                          f"{e.reason}); save the config as UTF-8", path=source, line=line) from None
+
+
 def read_yaml(path: Union[str, Path]) -> tuple[Any, Optional[yaml.Node]]:
     """Parse a YAML file into ``(data, node tree)``; errors give ``file:line``.
 
@@ -160,9 +173,10 @@ def read_yaml(path: Union[str, Path]) -> tuple[Any, Optional[yaml.Node]]:
     """
     source = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        raw = Path(path).read_bytes()
     except OSError as e:
         raise ConfigError(f"{source}: cannot read: {e.strerror or e}", path=source) from None
+    text = _decode(raw, source)
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
         if root is not None:

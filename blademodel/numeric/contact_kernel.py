@@ -343,7 +343,16 @@ class ContactIntegrator(Integrator):
         Returns
         -------
         status, mode, t
+
+        Raises
+        ------
+        ValueError
+            For an argument the kernel cannot take
+            (:func:`~blademodel.numeric.integrator.check_advance_arguments`).
         """
+        from .integrator import check_advance_arguments
+        check_advance_arguments(self, y, mode, start_period, end_period, n_transient, record=record, poincare=poincare,
+                                log=log, counters=counters, record_every=record_every, stats=stats, forces=forces)
         cm = np.array(mode, dtype=np.int64).reshape(self.nc)
         if y.shape != (self.n_state,):
             raise ValueError(f"y has shape {y.shape}, expected ({self.n_state},)")

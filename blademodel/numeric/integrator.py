@@ -30,9 +30,9 @@ EVENT_TOL_FLOOR = 1e-15
 
 def check_settings(steps_per_period, event_tol, max_events_per_step) -> None:
     """Validate the settings every kernel shares; raise ``ValueError`` naming the bad one."""
+    from .limits import check_integer
     for name, value in (("steps_per_period", steps_per_period), ("max_events_per_step", max_events_per_step)):
-        if int(value) != value or value < 1:
-            raise ValueError(f"{name} = {value!r} must be an integer >= 1")
+        check_integer(name, value, 1)   # also refuses inf, NaN and booleans (int(inf) would raise OverflowError)
     if not (event_tol > 0 and math.isfinite(event_tol)):
         raise ValueError(f"event_tol = {event_tol!r} must be a positive number")
     if event_tol < EVENT_TOL_FLOOR:
@@ -55,6 +55,103 @@ def state_vector(names: list, n_state: int, y0=None) -> np.ndarray:
         y0 = np.asarray(y0, dtype=float)
         y[: y0.size] = y0
     return y
+
+
+def _what(a) -> str:
+    """Short description of an argument for error messages."""
+    if isinstance(a, np.ndarray):
+        return f"a {a.dtype} array of shape {a.shape}"
+    return f"{type(a).__name__} {a!r}"[:80]
+
+
+def _check_array(name: str, a, template: np.ndarray, rows: int | None) -> int:
+    """``a`` matches ``template``'s dtype and trailing shape, writable, C-contiguous, with ``>= rows`` rows."""
+    want = f"a writable C-contiguous {template.dtype} array of shape ({'n' if rows is None else f'>= {rows}'}" \
+           + "".join(f", {k}" for k in template.shape[1:]) + ("," if template.ndim == 1 else "") + ")"
+    if not (isinstance(a, np.ndarray) and a.dtype == template.dtype and a.ndim == template.ndim
+            and a.shape[1:] == template.shape[1:] and a.flags.c_contiguous and a.flags.writeable
+            and (rows is None or a.shape[0] >= rows)):
+        raise ValueError(f"advance: {name} must be {want}, got {_what(a)}")
+    return a.shape[0]
+
+
+def _check_buffers(name: str, arrays, templates: tuple) -> int:
+    """A tuple of arrays like ``templates``, each with at least as many rows as the first; its row count."""
+    if not isinstance(arrays, (tuple, list)) or len(arrays) != len(templates):
+        raise ValueError(f"advance: {name} must be a tuple of {len(templates)} arrays (see {name}_buffer), "
+                         f"got {_what(arrays)}")
+    rows = _check_array(f"{name}[0]", arrays[0], templates[0], None)
+    for i, (a, tpl) in enumerate(zip(arrays[1:], templates[1:]), 1):
+        _check_array(f"{name}[{i}]", a, tpl, rows)
+    return rows
+
+
+def check_advance_arguments(integ: "Integrator", y, mode, start_period, end_period, n_transient=None, *,
+                            record=None, poincare=None, log=None, counters=None, record_every=1,
+                            stats=None, forces=None) -> None:
+    """Validate the arguments of an integrator's ``advance`` before they reach compiled code.
+
+    The kernels trust their arguments: a short state, a mode number out of range
+    or a buffer of the wrong shape would be read or written out of bounds and
+    return status 0 with garbage. This check costs microseconds per call.
+
+    Parameters
+    ----------
+    integ : Integrator
+        The integrator whose ``advance`` is called (its kernel, state size and modes).
+    y, mode, start_period, end_period, n_transient, record, poincare, log, counters, record_every
+        The arguments of ``advance``.
+    stats, forces : optional
+        Those of :meth:`ContactIntegrator.advance <blademodel.numeric.contact_kernel.ContactIntegrator.advance>`.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument, what it must be and what it is.
+    """
+    from .limits import check_integer
+    n = integ.n_state
+    if not (isinstance(y, np.ndarray) and y.dtype == np.float64 and y.shape == (n,) and y.flags.c_contiguous
+            and y.flags.writeable):
+        raise ValueError(f"advance: y must be a writable C-contiguous float64 array of shape ({n},) "
+                         f"(the state {', '.join(integ.meta['state'])}), got {_what(y)}")
+    if integ.kernel == "contact":
+        per_contact = integ.meta["contact_modes"]
+        cm = np.asarray(mode)
+        if cm.shape != (len(per_contact),) or not (np.issubdtype(cm.dtype, np.integer) and cm.dtype != np.bool_):
+            raise ValueError(f"advance: mode must hold one integer per contact ({len(per_contact)}), "
+                             f"got {_what(mode)}")
+        for j, (m, names) in enumerate(zip(cm, per_contact)):
+            if not 0 <= m < len(names):
+                raise ValueError(f"advance: mode[{j}] = {int(m)} is not a mode of contact "
+                                 f"{integ.meta['contacts'][j]!r} (0..{len(names) - 1}: {', '.join(names)})")
+    else:
+        names = integ.meta["modes"]
+        if not isinstance(mode, (int, np.integer)) or isinstance(mode, (bool, np.bool_)) \
+                or not 0 <= mode < len(names):
+            raise ValueError(f"advance: mode = {mode!r} is not a mode number "
+                             f"(0..{len(names) - 1}: {', '.join(names)})")
+    start = check_integer("advance: start_period", start_period, 0)
+    end = check_integer("advance: end_period", end_period, start)
+    first = start if n_transient is None else check_integer("advance: n_transient", n_transient, 0)
+    check_integer("advance: record_every", record_every, 1)
+    n_rec = 0
+    if record is not None:
+        n_rec = _check_buffers("record", record, integ.record_buffer(1))
+    if forces is not None:
+        nc = integ.nc
+        _check_buffers("forces", forces, (np.empty((1, nc)), np.empty((1, nc))))
+        if forces[0].shape[0] != n_rec or forces[1].shape[0] != n_rec:
+            raise ValueError(f"advance: forces must have as many rows as the record ({n_rec})")
+    if poincare is not None:
+        _check_array("poincare", poincare, np.empty((1, n)), max(end - first, 0))
+    if log is not None:
+        _check_buffers("log", log, integ.log_buffer(1))
+    if counters is not None:
+        _check_array("counters", counters, np.empty(1, dtype=np.int64), N_COUNTERS)
+    if stats is not None:
+        from .contract import N_STATS
+        _check_array("stats", stats, np.empty(1), N_STATS)
 
 
 class Integrator:
@@ -191,7 +288,14 @@ class HybridIntegrator(Integrator):
         Returns
         -------
         status, mode, t : int, int, float
+
+        Raises
+        ------
+        ValueError
+            For an argument the kernel cannot take (:func:`check_advance_arguments`).
         """
+        check_advance_arguments(self, y, mode, start_period, end_period, n_transient, record=record,
+                                poincare=poincare, log=log, counters=counters, record_every=record_every)
         if counters is None:
             counters = np.zeros(N_COUNTERS, dtype=np.int64)
         rec_t, rec_y, rec_mode = record if record is not None else self._empty_rec

@@ -9,6 +9,7 @@ import numpy as np
 from ..model import Model
 from .contract import C_RECORDS, N_COUNTERS
 from .kernels import make_integrator
+from .limits import reference_chunk_periods
 
 
 def without_contacts(model: Model) -> Model:
@@ -31,7 +32,8 @@ def mean_square_run(model: Model, *, transient: int, periods: int, steps_per_per
     names : sequence of str, optional
         States summed; default: the first mass's coordinates (``x1``, ``y1``).
     chunk_periods : int
-        Periods per recording chunk.
+        Periods per recording chunk (fewer if a chunk's records would exceed
+        :func:`~blademodel.numeric.limits.max_record_bytes`).
 
     Returns
     -------
@@ -40,6 +42,7 @@ def mean_square_run(model: Model, *, transient: int, periods: int, steps_per_per
         records of the whole window.
     """
     integ = make_integrator(model, steps_per_period=steps_per_period, event_tol=event_tol)
+    chunk_periods = reference_chunk_periods(integ.steps_per_period, integ.n_state, chunk_periods)
     names = list(names) if names is not None else list(model.masses[0].coordinates)
     cols = [integ.state_names.index(n) for n in names]
     S = integ.steps_per_period

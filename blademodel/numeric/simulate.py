@@ -12,6 +12,7 @@ from .contract import (C_LOGGED, C_RECORDS, COUNTER_NAMES, N_COUNTERS, N_STATS, 
                        STATUS_EVENT_STORM, STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE, STATUS_OK)
 from .integrator import HybridIntegrator, excitation_period  # noqa: F401  (re-exported)
 from .kernels import make_integrator
+from .limits import check_run_length
 from .result import SimulationError, SimulationResult
 
 
@@ -70,10 +71,20 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
     Returns
     -------
     SimulationResult
+
+    Raises
+    ------
+    ValueError
+        For a bad setting, before anything is compiled; a run longer than
+        :data:`~blademodel.numeric.limits.MAX_STEPS` steps or keeping more than
+        :func:`~blademodel.numeric.limits.max_record_bytes` is a
+        :class:`~blademodel.numeric.limits.RunTooLargeError`.
+    SimulationError
+        If the run fails and ``raise_on_error`` is set.
     """
-    for name, value, lo in (("periods", periods, 1), ("transient", transient, 0), ("record_every", record_every, 1)):
-        if int(value) != value or value < lo:
-            raise ValueError(f"{name} = {value!r} must be an integer >= {lo}")
+    check_run_length(model, periods=periods, transient=transient, steps_per_period=steps_per_period,
+                     record_every=record_every, energy=energy)
+    periods, transient, record_every = int(periods), int(transient), int(record_every)
     integ = make_integrator(model, kernel=kernel, steps_per_period=steps_per_period, event_tol=event_tol,
                             max_events_per_step=max_events_per_step, energy=energy, period=period,
                             check_stability=check_stability)

@@ -25,6 +25,7 @@ from importlib import metadata
 from typing import Any, Mapping
 
 from .base import FrictionLaw
+from .validation import check_law_class
 
 #: Entry-point group of friction laws (name -> ``"module:Class"``).
 ENTRY_POINT_GROUP = "blademodel.friction_laws"
@@ -101,7 +102,7 @@ def _load(path: str, label: str) -> type:
                              f"{qualname!r}") from None
     if not (isinstance(obj, type) and issubclass(obj, FrictionLaw)):
         raise ValueError(f"{label!r} is not a FrictionLaw subclass")
-    return obj
+    return check_law_class(obj, label)
 
 
 def law_class(name: str) -> type:
