@@ -26,12 +26,13 @@ def test_pair_on_the_per_contact_kernel_equals_the_product_kernel(law):
     the bit. Across the kernels the arithmetic is ordered differently and events are bracketed
     differently (bisection; predicted roots and secants), each event state lying past its root by at most the
     event tolerance: after 80 periods and ~2000 events the states agree to about 1e-11 of their
-    amplitudes, with the same event sequence.
+    amplitudes, with the same event sequence. (The product kernel does not look for grazing
+    contacts, so the per-contact kernel is run without: ``tests/test_grazing.py``.)
     """
     for overrides in ({}, {"gamma": 8.0, "F0": 80.0}):
         m = BladePair(friction=law, **overrides).build()
         a = simulate(m, transient=60, periods=20, kernel="product")
-        b = simulate(m, transient=60, periods=20, kernel="contact")
+        b = simulate(m, transient=60, periods=20, kernel="contact", detect_grazing=False)
         amp = np.max(np.abs(a.y), axis=0)          # each state's amplitude over the recorded window
         assert np.max(np.abs(a.final_state - b.final_state) / amp) < 1e-10
         assert np.max(np.abs(a.poincare - b.poincare) / amp) < 1e-10

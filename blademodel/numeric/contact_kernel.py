@@ -157,13 +157,18 @@ class ContactIntegrator(Integrator):
         As for :class:`~blademodel.numeric.integrator.HybridIntegrator`.
     max_pivots : int
         Cap on pivots of one friction problem (an unresolved problem stops the run).
+    detect_grazing : bool
+        After every step without a crossing, look for a guard that crossed and came
+        back within the step (a brief contact, a grazing touch) where the cubic Hermite
+        interpolant of its values and rates says so, and locate it (counter
+        ``grazing_events``). Guards with known rates only: the penetration.
     """
 
     kernel = "contact"
 
     def __init__(self, model: Model, *, steps_per_period: int = 1000, event_tol: float = 1e-10,
                  max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
-                 check_stability: bool = True, max_pivots: int | None = None):
+                 check_stability: bool = True, max_pivots: int | None = None, detect_grazing: bool = True):
         self._settings(model, steps_per_period, event_tol, max_events_per_step, period)
         self.module, self.kmeta = compile_contact_kernel(model)
         laws, kind = law_kinds(model)
@@ -189,6 +194,7 @@ class ContactIntegrator(Integrator):
                      "contact_modes": [self.kmeta["kinds"][k]["modes"] for k in kind],
                      "contact_guards": [self.kmeta["kinds"][k]["guards"] for k in kind]}
         self.nc = len(model.contacts)
+        self.detect_grazing = bool(detect_grazing)
         self.max_pivots = int(max_pivots) if max_pivots is not None else 4 * self.nc + 20
         self.I, self.R, self.WI, self.WF = pack_tables(self.tables, self.n_state)
         self.SC = np.zeros((9, self.n_state))
@@ -372,7 +378,7 @@ class ContactIntegrator(Integrator):
         status, t = self.module.integrate(
             y, cm, self.I, self.R, self.WI, self.WF, self.SC, self.GS, self.period, self.steps_per_period, int(start_period),
             int(end_period), int(start_period if n_transient is None else n_transient), int(record_every),
-            self.event_tol, self.max_events_per_step, self.max_pivots, rec_t, rec_y, rec_cm, rec_N, rec_f, poincare,
+            self.event_tol, self.max_events_per_step, self.max_pivots, self.detect_grazing, rec_t, rec_y, rec_cm, rec_N, rec_f, poincare,
             log_t, log_c, log_g, log_f, log_to, counters, stats)
         return int(status), cm, float(t)
 

@@ -62,7 +62,7 @@ while *some* admissible distribution exists.
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import (C_BISECTIONS, C_EVENTS, C_FRICTION_PIVOTS, C_LOGGED, C_RECORDS, C_RHS,
+from blademodel.numeric.contract import (C_BISECTIONS, C_EVENTS, C_FRICTION_PIVOTS, C_GRAZING, C_LOGGED, C_RECORDS, C_RHS,
                                          C_STEPS, F_B, F_CG, F_D, F_DL, F_F, F_FR, F_L, F_N, F_ND, F_NULL, F_SG,
                                          F_V, F_X, F_YEV, F_Z, F_DR, F_T, H_N, H_NC, H_NF, H_NG, H_NLAW, MAX_LAW_STATES,
                                          O_CI, O_CIDX, O_CLAW, O_CP, O_CSO, O_FG, O_FI, O_KI, O_KP, O_WI, O_WP, R_CV, R_FC,
@@ -484,6 +484,53 @@ def hermite_root(g0, g1, d0, d1, s):
     return x
 
 
+def hermite_extremum(g0, g1, d0, d1):
+    """Where the Hermite interpolant's slope, ``d0`` and ``d1`` of opposite signs at the ends, is zero."""
+    lo = 0.0
+    hi = 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        d = hermite(mid, g0, g1, d0, d1)[1]
+        if (d > 0.0) == (d0 > 0.0):
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+def grazing_candidate(cm, I, G0, G1, D0, D1, dt):
+    """The earliest fraction of a step at which a guard that did not cross may have crossed and come back.
+
+    A guard with known rates that moves toward its crossing at the step's start and
+    away from it at the end, both ends on the side before the crossing, has an
+    extremum inside the step; if the cubic Hermite interpolant of its values and
+    rates puts that extremum past zero, the guard crossed and returned within the
+    step (a brief contact, a grazing touch). Returns that extremum's fraction, or -1.
+    """
+    nc = I[H_NC]
+    claw = vec(I, I, O_CLAW, nc)
+    best = -1.0
+    for j in range(nc):
+        K = claw[j]
+        m = cm[j]
+        for gi in range(NG[K, m]):  # noqa: F821
+            d0 = D0[j, gi] * dt
+            d1 = D1[j, gi] * dt
+            if not (math.isfinite(d0) and math.isfinite(d1)):
+                continue
+            g0 = G0[j, gi]
+            g1 = G1[j, gi]
+            dr = GDIR[K, m, gi]  # noqa: F821
+            rising = dr >= 0 and g0 < 0.0 and g1 < 0.0 and d0 > 0.0 and d1 < 0.0
+            falling = dr <= 0 and g0 > 0.0 and g1 > 0.0 and d0 < 0.0 and d1 > 0.0
+            if rising or falling:
+                s = hermite_extremum(g0, g1, d0, d1)
+                v = hermite(s, g0, g1, d0, d1)[0]
+                if ((rising and v > 0.0) or (falling and v < 0.0)) and (best < 0.0 or s < best):
+                    best = s
+    return best
+
+
 def predicted_root(g0, g1, d0, d1, lo, hi, dt):
     """Predicted root in ``(lo, hi)`` of a guard with values ``g0, g1`` and rates ``d0, d1`` at the ends."""
     x = g0 / (g0 - g1) if g0 != g1 else 0.5
@@ -834,8 +881,8 @@ def record(irec, t, y, cm, I, R, WI, WF, rec_t, rec_y, rec_cm, rec_N, rec_f):
 
 
 def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_period, end_period, n_transient,
-              record_every, event_tol, max_events, max_pivots, rec_t, rec_y, rec_cm, rec_N, rec_f, poincare,
-              log_t, log_c, log_g, log_from, log_to, counters, stats):
+              record_every, event_tol, max_events, max_pivots, detect_grazing, rec_t, rec_y, rec_cm, rec_N, rec_f,
+              poincare, log_t, log_c, log_g, log_from, log_to, counters, stats):
     """Integrate excitation periods ``start_period`` to ``end_period`` (exclusive).
 
     The same schedule as the product-mode kernel (:func:`blademodel.numeric.loop.integrate`):
@@ -881,7 +928,20 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                 rhs_guards(t_end, y1, cm, I, R, WI, WF, knext, G1)
                 guard_rates(I, WF, D1)
                 counters[C_RHS] += 4
-                if first_crossing(cm, I, WI, G0, G1) < 0:
+                code = first_crossing(cm, I, WI, G0, G1)
+                sub = dt   # the sub-step whose end lies past the event
+                if code < 0 and detect_grazing:
+                    xg = grazing_candidate(cm, I, G0, G1, D0, D1, dt)
+                    if xg > 0.0:
+                        Gm, Dm = GS[2], GS[6]
+                        code = locate_trial(t, y, dt, xg, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counters)
+                        if code >= 0:   # it did cross: the event's bracket ends at the extremum
+                            sub = xg * dt
+                            for i in range(n):
+                                y1[i] = ymid[i]
+                            copy_guards(G1, Gm, D1, Dm)
+                            counters[C_GRAZING] += 1
+                if code < 0:
                     for i in range(n):
                         y[i] = y1[i]
                         SC[0, i] = knext[i]
@@ -891,12 +951,12 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                     if WI[0] > 0:
                         stats[S_MAX_CONE_RATIO] = max(stats[S_MAX_CONE_RATIO], cone_ratio(y, I, R, WI, WF))
                     break
-                hi = locate_event(t, y, dt, cm, I, R, WI, WF, SC, GS, event_tol * h / dt, counters)
+                hi = locate_event(t, y, sub, cm, I, R, WI, WF, SC, GS, event_tol * h / sub, counters)
                 code = first_crossing(cm, I, WI, G0, G1)
                 t_sub = t
                 for i in range(n):
                     ysub[i] = y[i]
-                t = t_end if hi == 1.0 else t + hi * dt
+                t = t_end if hi == 1.0 and sub == dt else t + hi * sub
                 for i in range(n):
                     y[i] = y1[i]
                 while code >= 0:

@@ -27,11 +27,12 @@ C_RHS = 3             #: right-hand-side evaluations
 C_LOGGED = 4          #: events offered to the log (may exceed its length)
 C_RECORDS = 5         #: records written (the next record's row)
 C_FRICTION_PIVOTS = 6  #: pivots of the friction complementarity problem (per-contact kernel)
-N_COUNTERS = 7
+C_GRAZING = 7         #: crossings found inside a step whose ends showed none (per-contact kernel)
+N_COUNTERS = 8
 
 #: Names of the integer counters, in index order (``SimulationResult.counters``).
 COUNTER_NAMES = ("steps", "events", "bisections", "rhs_evaluations", "events_logged", "records",
-                 "friction_pivots")
+                 "friction_pivots", "grazing_events")
 
 # Float statistics: one float64 array of N_STATS, accumulated across calls.
 S_MAX_CONE_RATIO = 0  #: largest ``|f| / (mu N)`` over sticking rigid-stick contacts at step ends

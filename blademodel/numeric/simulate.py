@@ -11,7 +11,7 @@ from ..model import Model
 from .contract import (C_LOGGED, C_RECORDS, COUNTER_NAMES, N_COUNTERS, N_STATS, S_MAX_CONE_RATIO, STAT_NAMES,
                        STATUS_EVENT_STORM, STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE, STATUS_OK)
 from .integrator import HybridIntegrator, excitation_period  # noqa: F401  (re-exported)
-from .kernels import make_integrator
+from .kernels import choose_kernel, make_integrator
 from .limits import check_run_length
 from .result import SimulationError, SimulationResult
 
@@ -21,7 +21,8 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
              max_log: int = 200_000, energy: bool = False, y0=None, period: float | None = None,
              check_stability: bool = True, raise_on_error: bool = True,
              length_scale: float | None = None, progress=None, chunk_periods: int = 50,
-             mode0=None, kernel: str = "auto", record_forces: bool = True) -> SimulationResult:
+             mode0=None, kernel: str = "auto", record_forces: bool = True,
+             detect_grazing: bool = True) -> SimulationResult:
     """Integrate ``model`` from rest with fixed-step RK4 and located events.
 
     Parameters
@@ -67,6 +68,11 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
     record_forces : bool
         Per-contact kernel: record each contact's normal and friction force with
         every record (``result.contacts["N"]``, ``["f"]``).
+    detect_grazing : bool
+        Per-contact kernel: locate a contact entered (or left) and left again within
+        one step, which neither end of the step shows (``docs/solver.md``; counter
+        ``grazing_events``). The product-mode kernel (the pair's default) does not
+        look for them: pass ``kernel="contact"``.
 
     Returns
     -------
@@ -85,9 +91,10 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
     check_run_length(model, periods=periods, transient=transient, steps_per_period=steps_per_period,
                      record_every=record_every, energy=energy)
     periods, transient, record_every = int(periods), int(transient), int(record_every)
+    extra = {"detect_grazing": detect_grazing} if choose_kernel(model, kernel) == "contact" else {}
     integ = make_integrator(model, kernel=kernel, steps_per_period=steps_per_period, event_tol=event_tol,
                             max_events_per_step=max_events_per_step, energy=energy, period=period,
-                            check_stability=check_stability)
+                            check_stability=check_stability, **extra)
     per_contact = integ.kernel == "contact"
     T, n, meta = integ.period, integ.n_state, integ.meta
     y = integ.initial_state(y0)
@@ -151,7 +158,7 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
         status=int(status), message=message, length_scale=length_scale,
         settings={"periods": periods, "transient": transient, "steps_per_period": steps_per_period,
                   "event_tol": event_tol, "record_every": record_every,
-                  "kernel": integ.kernel},
+                  "kernel": integ.kernel, "detect_grazing": bool(extra.get("detect_grazing", False))},
         contacts=contact, final_contact_modes=np.asarray(mode).copy() if per_contact else None)
     if status != 0 and raise_on_error:
         raise SimulationError(message, result)
