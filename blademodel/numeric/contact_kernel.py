@@ -162,13 +162,17 @@ class ContactIntegrator(Integrator):
         back within the step (a brief contact, a grazing touch) where the cubic Hermite
         interpolant of its values and rates says so, and locate it (counter
         ``grazing_events``). Guards with known rates only: the penetration.
+    event_location : {"predicted", "bisection"}
+        How an event's bracket is shrunk: from predicted roots (the default here) or
+        by bisection (:class:`~blademodel.numeric.integrator.HybridIntegrator`).
     """
 
     kernel = "contact"
 
     def __init__(self, model: Model, *, steps_per_period: int = 1000, event_tol: float = 1e-10,
                  max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
-                 check_stability: bool = True, max_pivots: int | None = None, detect_grazing: bool = True):
+                 check_stability: bool = True, max_pivots: int | None = None, detect_grazing: bool = True,
+                 event_location: str = "predicted"):
         self._settings(model, steps_per_period, event_tol, max_events_per_step, period)
         self.module, self.kmeta = compile_contact_kernel(model)
         laws, kind = law_kinds(model)
@@ -195,6 +199,8 @@ class ContactIntegrator(Integrator):
                      "contact_guards": [self.kmeta["kinds"][k]["guards"] for k in kind]}
         self.nc = len(model.contacts)
         self.detect_grazing = bool(detect_grazing)
+        from .integrator import check_event_location
+        self.event_location = check_event_location(event_location)
         self.max_pivots = int(max_pivots) if max_pivots is not None else 4 * self.nc + 20
         self.I, self.R, self.WI, self.WF = pack_tables(self.tables, self.n_state)
         self.SC = np.zeros((9, self.n_state))
@@ -378,7 +384,8 @@ class ContactIntegrator(Integrator):
         status, t = self.module.integrate(
             y, cm, self.I, self.R, self.WI, self.WF, self.SC, self.GS, self.period, self.steps_per_period, int(start_period),
             int(end_period), int(start_period if n_transient is None else n_transient), int(record_every),
-            self.event_tol, self.max_events_per_step, self.max_pivots, self.detect_grazing, rec_t, rec_y, rec_cm, rec_N, rec_f, poincare,
+            self.event_tol, self.max_events_per_step, self.max_pivots, self.detect_grazing,
+            self.event_location == "predicted", rec_t, rec_y, rec_cm, rec_N, rec_f, poincare,
             log_t, log_c, log_g, log_f, log_to, counters, stats)
         return int(status), cm, float(t)
 

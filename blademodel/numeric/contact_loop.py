@@ -558,7 +558,7 @@ def earliest_crossing(cm, I, WI, Glo, G1, Dlo, D1, lo, hi, dt):
     return best, xbest
 
 
-def locate_event(t, y, dt, cm, I, R, WI, WF, SC, GS, width, counters):
+def locate_event(t, y, dt, cm, I, R, WI, WF, SC, GS, width, predicted, counters):
     """Bracket the earliest guard crossing of the sub-step ``[t, t + dt]`` to ``width`` (a fraction of it).
 
     On entry ``SC[0]`` holds ``dy/dt`` at ``(t, y)``, ``SC[5]`` the state at the
@@ -595,7 +595,9 @@ def locate_event(t, y, dt, cm, I, R, WI, WF, SC, GS, width, counters):
     w_old = 1.0
     k_pred = 0
     while hi - lo > width and k < MAX_LOCATE_TRIALS:
-        if k > k_pred:
+        if not predicted:
+            x = 0.5 * (lo + hi)   # bisection (for comparison: the product kernel's default)
+        elif k > k_pred:
             if math.isfinite(slope) and slope != 0.0:
                 x = xb - gb / slope
                 slope = math.nan
@@ -609,9 +611,9 @@ def locate_event(t, y, dt, cm, I, R, WI, WF, SC, GS, width, counters):
                 w_old = hi - lo
         if not lo < x < hi:
             x = 0.5 * (lo + hi)
-        if x - lo < 0.5 * width:
+        if predicted and x - lo < 0.5 * width:
             x = min(lo + 0.75 * width, 0.5 * (lo + hi)) if hi - lo > 1.5 * width else lo + 0.75 * width
-        elif hi - x < 0.5 * width:
+        elif predicted and hi - x < 0.5 * width:
             x = max(hi - 0.75 * width, 0.5 * (lo + hi)) if hi - lo > 1.5 * width else hi - 0.75 * width
         if not lo < x < hi:
             break   # the bracket is as narrow as the floating-point resolution allows
@@ -881,8 +883,8 @@ def record(irec, t, y, cm, I, R, WI, WF, rec_t, rec_y, rec_cm, rec_N, rec_f):
 
 
 def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_period, end_period, n_transient,
-              record_every, event_tol, max_events, max_pivots, detect_grazing, rec_t, rec_y, rec_cm, rec_N, rec_f,
-              poincare, log_t, log_c, log_g, log_from, log_to, counters, stats):
+              record_every, event_tol, max_events, max_pivots, detect_grazing, predicted, rec_t, rec_y, rec_cm,
+              rec_N, rec_f, poincare, log_t, log_c, log_g, log_from, log_to, counters, stats):
     """Integrate excitation periods ``start_period`` to ``end_period`` (exclusive).
 
     The same schedule as the product-mode kernel (:func:`blademodel.numeric.loop.integrate`):
@@ -951,7 +953,7 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                     if WI[0] > 0:
                         stats[S_MAX_CONE_RATIO] = max(stats[S_MAX_CONE_RATIO], cone_ratio(y, I, R, WI, WF))
                     break
-                hi = locate_event(t, y, sub, cm, I, R, WI, WF, SC, GS, event_tol * h / sub, counters)
+                hi = locate_event(t, y, sub, cm, I, R, WI, WF, SC, GS, event_tol * h / sub, predicted, counters)
                 code = first_crossing(cm, I, WI, G0, G1)
                 t_sub = t
                 for i in range(n):

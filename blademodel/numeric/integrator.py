@@ -41,6 +41,17 @@ def check_settings(steps_per_period, event_tol, max_events_per_step) -> None:
                       stacklevel=3)
 
 
+#: How a kernel shrinks an event's bracket (``event_location``).
+EVENT_LOCATIONS = ("bisection", "predicted")
+
+
+def check_event_location(value) -> str:
+    """``value`` if it names a way of locating events, else ``ValueError`` naming it."""
+    if value not in EVENT_LOCATIONS:
+        raise ValueError(f"event_location = {value!r} must be one of {', '.join(EVENT_LOCATIONS)}")
+    return value
+
+
 def state_vector(names: list, n_state: int, y0=None) -> np.ndarray:
     """State vector from ``y0`` (array or ``{name: value}``); default rest."""
     y = np.zeros(n_state)
@@ -194,8 +205,13 @@ class HybridIntegrator(Integrator):
     steps_per_period : int
         ``h = T / steps_per_period``.
     event_tol : float
-        Events are bracketed to ``event_tol * h`` by bisection; ``>= 1`` switches
-        at the end of the step instead (no location, first order; for comparison).
+        Events are bracketed to ``event_tol * h``; ``>= 1`` switches at the end of
+        the step instead (no location, first order; for comparison).
+    event_location : {"bisection", "predicted"}
+        How the bracket is shrunk: by bisection (about ``log2(1 / event_tol)``
+        sub-steps an event, the default here, which reproduces the paper pair's
+        published results bit for bit) or from predicted roots (chord and secants,
+        about 5; the same roots to ``event_tol``; ``docs/solver.md``).
     max_events_per_step : int
         Cap on events in one step (an event storm stops the run).
     energy : bool
@@ -208,8 +224,9 @@ class HybridIntegrator(Integrator):
 
     def __init__(self, model: Model, *, steps_per_period: int = 1000, event_tol: float = 1e-10,
                  max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
-                 check_stability: bool = True):
+                 check_stability: bool = True, event_location: str = "bisection"):
         self._settings(model, steps_per_period, event_tol, max_events_per_step, period)
+        self.event_location = check_event_location(event_location)
         self.compiled = compile_model(model, energy=energy)
         self.module, self.meta = self.compiled.module, self.compiled.meta
         self.p_raw = np.array([model.parameters[n] for n in self.meta["params"]], dtype=float)
@@ -305,5 +322,5 @@ class HybridIntegrator(Integrator):
         status, mode, t = self.module.integrate(
             y, int(mode), self.p, self.period, self.steps_per_period, int(start_period), int(end_period),
             int(start_period if n_transient is None else n_transient), int(record_every), self.event_tol,
-            self.max_events_per_step, rec_t, rec_y, rec_mode, poincare, log_t, log_g, log_f, log_to, counters)
+            self.max_events_per_step, self.event_location == "predicted", rec_t, rec_y, rec_mode, poincare, log_t, log_g, log_f, log_to, counters)
         return int(status), int(mode), float(t)

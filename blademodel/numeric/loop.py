@@ -19,6 +19,8 @@ STATUS_NONFINITE = 1
 STATUS_EVENT_STORM = 2
 
 C_STEPS, C_EVENTS, C_BISECTIONS, C_RHS, C_LOGGED, C_RECORDS = 0, 1, 2, 3, 4, 5
+#: Cap on the trial sub-steps of one event's location.
+MAX_LOCATE_TRIALS = 160
 
 
 def rk4_step(mode, t, y, h, p, k1, k2, k3, k4, tmp, out):
@@ -64,6 +66,94 @@ def first_crossing(mode, g0, g1):
     return -1
 
 
+def earliest_chord(mode, glo, g1, lo, hi):
+    """The crossed guard of ``mode`` whose chord between ``lo`` and ``hi`` crosses zero first, and that point."""
+    best = -1
+    xbest = hi
+    for i in range(N_GUARDS[mode]):  # noqa: F821
+        if crossed(glo[i], g1[i], GUARD_DIR[mode, i]):  # noqa: F821
+            x = lo + (hi - lo) * (glo[i] / (glo[i] - g1[i]) if glo[i] != g1[i] else 0.5)
+            if best < 0 or x < xbest:
+                best = i
+                xbest = x
+    return best, xbest
+
+
+def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp, y1, ymid, g0, g1, gm, glo,
+                 counters):
+    """Bracket the earliest crossing of the sub-step ``[t, t + dt]`` below ``event_tol * h``.
+
+    ``y1`` and ``g1`` hold the state and guards at the sub-step's end on entry, and
+    at the bracket's far end ``hi`` (returned, a fraction of ``dt``) on exit. Every
+    trial is the true RK4 sub-step from ``(t, y)``; the bracket is kept by
+    ``first_crossing`` over every guard. Without ``predicted``, bisection (34 trials
+    at ``1e-10``). With it, the trials follow the crossed guard whose chord crosses
+    first: the chord's root, then secants through the last two trials of that guard,
+    inside the bracket, a bisection when two trials did not halve it, and a trial
+    predicted within half a tolerance of an end set three quarters of a tolerance past
+    it, so the last trial closes the bracket (about 5 trials). Either way the location
+    ends when the bracket cannot be split any further in floating point.
+    """
+    n = y.shape[0]
+    ng = g0.shape[0]
+    width = event_tol * h / dt
+    for i in range(ng):
+        glo[i] = g0[i]
+    lo = 0.0
+    hi = 1.0
+    gi, x = earliest_chord(mode, glo, g1, lo, hi)
+    if gi < 0:
+        gi = first_crossing(mode, g0, g1)
+    xa, ga, xb, gb = lo, glo[gi], hi, g1[gi]
+    k = 0
+    k_pred = 0
+    w_old = 1.0
+    while (hi - lo) * dt > event_tol * h and k < MAX_LOCATE_TRIALS:
+        if not predicted:
+            x = 0.5 * (lo + hi)
+        else:
+            if k > k_pred:
+                x = xb - gb * (xb - xa) / (gb - ga) if gb != ga else 0.5 * (lo + hi)
+                if k % 2 == 0:
+                    if hi - lo > 0.5 * w_old:
+                        x = 0.5 * (lo + hi)
+                    w_old = hi - lo
+            if not lo < x < hi:
+                x = 0.5 * (lo + hi)
+            if x - lo < 0.5 * width:
+                x = lo + 0.75 * width
+            elif hi - x < 0.5 * width:
+                x = hi - 0.75 * width
+        if not lo < x < hi:
+            break   # the bracket is as narrow as the floating-point resolution allows
+        k += 1
+        rk4_step(mode, t, y, x * dt, p, k1, k2, k3, k4, tmp, ymid)
+        guards(mode, t + x * dt, ymid, p, gm)  # noqa: F821
+        counters[C_BISECTIONS] += 1
+        counters[C_RHS] += 4
+        c = first_crossing(mode, g0, gm)
+        if c >= 0:
+            hi = x
+            for i in range(n):
+                y1[i] = ymid[i]
+            for i in range(ng):
+                g1[i] = gm[i]
+        else:
+            lo = x
+            for i in range(ng):
+                glo[i] = gm[i]
+        if c >= 0 and c != gi:
+            gi, x = earliest_chord(mode, glo, g1, lo, hi)   # an earlier crossing of another guard
+            if gi < 0:
+                gi = c
+            xa, ga, xb, gb = lo, glo[gi], hi, g1[gi]
+            k_pred = k
+            continue
+        xa, ga = xb, gb
+        xb, gb = x, gm[gi]
+    return hi
+
+
 def simultaneous_crossing(mode, contact, gs, ge):
     """First guard of ``mode`` owned by another contact than ``contact`` that crossed.
 
@@ -97,7 +187,7 @@ def initial_mode(t, y, p, g, ytmp):
 
 
 def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_transient,
-              record_every, event_tol, max_events, rec_t, rec_y, rec_mode, poincare, log_t,
+              record_every, event_tol, max_events, predicted, rec_t, rec_y, rec_mode, poincare, log_t,
               log_guard, log_from, log_to, counters):
     """Integrate excitation periods ``start_period`` to ``end_period`` (exclusive).
 
@@ -107,10 +197,11 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
 
     The step is ``h = period / steps_per_period``, so ``t = n * period`` falls on
     step ends (the Poincare section). After each (sub)step every guard of the
-    current mode is checked; on a crossing, the earliest event is bracketed by
-    bisection on the step fraction, re-integrating from the step start, until the
-    bracket is below ``event_tol * h``; the state is taken at the bracket's far end
-    (past the root), the transition is applied and the rest of the step follows.
+    current mode is checked; on a crossing, the earliest event is bracketed
+    (:func:`locate_event`: by bisection, or with ``predicted`` from predicted roots),
+    re-integrating from the step start, until the bracket is below ``event_tol * h``;
+    the state is taken at the bracket's far end (past the root), the transition is
+    applied and the rest of the step follows.
 
     ``y`` is updated in place. Returns ``(status, mode, t)``.
     """
@@ -129,6 +220,7 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
     g0 = np.empty(ng)
     g1 = np.empty(ng)
     gm = np.empty(ng)
+    glo = np.empty(ng)
     max_log = log_t.shape[0]
     t = period * start_period
     irec = counters[C_RECORDS]
@@ -160,24 +252,8 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
                     g0_valid = True
                     t = t_end
                     break
-                lo = 0.0
-                hi = 1.0
-                while (hi - lo) * dt > event_tol * h:
-                    mid = 0.5 * (lo + hi)
-                    if not lo < mid < hi:
-                        break   # the bracket is as narrow as the floating-point resolution allows
-                    rk4_step(mode, t, y, mid * dt, p, k1, k2, k3, k4, tmp, ymid)
-                    guards(mode, t + mid * dt, ymid, p, gm)  # noqa: F821
-                    counters[C_BISECTIONS] += 1
-                    counters[C_RHS] += 4
-                    if first_crossing(mode, g0, gm) >= 0:
-                        hi = mid
-                        for i in range(n):
-                            y1[i] = ymid[i]
-                        for i in range(ng):
-                            g1[i] = gm[i]
-                    else:
-                        lo = mid
+                hi = locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp, y1, ymid,
+                                  g0, g1, gm, glo, counters)
                 gi = first_crossing(mode, g0, g1)
                 t_sub = t
                 for i in range(n):
