@@ -27,13 +27,20 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--transient", type=int, default=200, metavar="M", help="periods discarded (default 200)")
     p.add_argument("--periods", type=int, default=100, metavar="N", help="periods recorded (default 100)")
     p.add_argument("--steps-per-period", type=int, default=1000, metavar="S",
-                   help="RK4 steps per excitation period (default 1000)")
+                   help="steps per excitation period (default 1000)")
+    p.add_argument("--method", choices=("rk4", "rk8"), default="rk4",
+                   help="stepping method: classical RK4 (default) or an eighth-order Runge-Kutta method")
     p.add_argument("--event-tol", type=float, default=1e-10, metavar="E",
                    help="event bracket, as a fraction of the step (default 1e-10)")
     p.add_argument("--record-every", type=int, default=1, metavar="K",
                    help="record the state every K steps (default 1; Poincare samples are always kept)")
     p.add_argument("--kernel", choices=("auto", "product", "contact"), default="auto",
                    help="auto (default): product modes for at most one contact, per-contact modes otherwise")
+    p.add_argument("--event-location", choices=("bisection", "predicted"), default=None,
+                   help="how events are bracketed (default: bisection on the product kernel, predicted roots "
+                        "on the per-contact kernel)")
+    p.add_argument("--no-grazing", action="store_true",
+                   help="per-contact kernel: do not look for contacts entered and left within one step")
     p.add_argument("--out", metavar="FILE", help="save the full result (.npz)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=run)
@@ -130,7 +137,8 @@ def run(args: argparse.Namespace) -> int:
         result = simulate(model, periods=args.periods, transient=args.transient,
                           steps_per_period=args.steps_per_period, event_tol=args.event_tol,
                           length_scale=model.length_scale, progress=_progress, record_every=args.record_every,
-                          kernel=args.kernel)
+                          kernel=args.kernel, method=args.method, event_location=args.event_location,
+                          detect_grazing=not args.no_grazing)
     except SimulationError as e:
         print(f"error: {e}", file=sys.stderr)
         return 1

@@ -29,6 +29,7 @@ from .contact_tables import NumericTables, cached_tables
 from . import contract
 from .contract import N_COUNTERS, N_STATS
 from .integrator import Integrator
+from .methods import get_method
 
 _MEMO: dict = {}
 
@@ -91,8 +92,13 @@ def compile_contact_kernel(model: Model):
     return out
 
 
-def pack_tables(tables: NumericTables, n_state: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The flat arrays ``I``, ``R``, ``WI``, ``WF`` of the kernel (layout: :mod:`.contract`)."""
+def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4") -> tuple[np.ndarray, np.ndarray,
+                                                                                   np.ndarray, np.ndarray]:
+    """The flat arrays ``I``, ``R``, ``WI``, ``WF`` of the kernel (layout: :mod:`.contract`).
+
+    ``method``: the stepping method (:mod:`.methods`); classical RK4 is written out in
+    the kernel, any other enters as its tableau.
+    """
     n, nc = tables.n, len(tables.cgap)
     m = max(nc, 1)
     Kp, Ki, Kv = tables.K
@@ -105,6 +111,9 @@ def pack_tables(tables: NumericTables, n_state: int) -> tuple[np.ndarray, np.nda
     header[contract.H_N], header[contract.H_NC], header[contract.H_NF] = n, nc, len(fi)
     header[contract.H_NG], header[contract.H_LPW] = len(om), tables.LP.shape[1]
     header[contract.H_NLAW] = tables.n_law
+    rk = get_method(method)
+    header[contract.H_NS] = 0 if method == "rk4" else rk.stages
+    tableau = np.zeros(0) if method == "rk4" else rk.tableau()
 
     def pack(parts, keys, dtype, start):
         chunks, pos = [], start
@@ -125,8 +134,8 @@ def pack_tables(tables: NumericTables, n_state: int) -> tuple[np.ndarray, np.nda
         Wp.append(len(Wi))
     ints = pack([Kp, Ki, Cp, Ci, fi, fg, tables.cidx, tables.claw, tables.cso, tables.LP, Wp, Wi],
                 range(contract.O_KP, contract.O_WI + 1), np.int64, contract.H_SIZE)
-    R = pack([tables.invm, Kv, Cv, fs, fc, om, tables.cgn, tables.cgr, tables.cgap, tables.ck, tables.p, tables.W],
-             range(contract.R_INVM, contract.R_W + 1), np.float64, 0)
+    R = pack([tables.invm, Kv, Cv, fs, fc, om, tables.cgn, tables.cgr, tables.cgap, tables.ck, tables.p, tables.W,
+              tableau], range(contract.R_INVM, contract.R_RK + 1), np.float64, 0)
     sizes = [n] + [m] * 9 + [contract.MAX_GROUPS, contract.MAX_GROUPS, contract.MAX_LAW_STATES, n_state, m * m,
                              m, 1]
     WF = pack([np.zeros(k) for k in sizes],
@@ -162,6 +171,8 @@ class ContactIntegrator(Integrator):
         back within the step (a brief contact, a grazing touch) where the cubic Hermite
         interpolant of its values and rates says so, and locate it (counter
         ``grazing_events``). Guards with known rates only: the penetration.
+    method : {"rk4", "rk8"}
+        Stepping method (:mod:`~blademodel.numeric.methods`).
     event_location : {"predicted", "bisection"}
         How an event's bracket is shrunk: from predicted roots (the default here) or
         by bisection (:class:`~blademodel.numeric.integrator.HybridIntegrator`).
@@ -172,7 +183,7 @@ class ContactIntegrator(Integrator):
     def __init__(self, model: Model, *, steps_per_period: int = 1000, event_tol: float = 1e-10,
                  max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
                  check_stability: bool = True, max_pivots: int | None = None, detect_grazing: bool = True,
-                 event_location: str = "predicted"):
+                 event_location: str = "predicted", method: str = "rk4"):
         self._settings(model, steps_per_period, event_tol, max_events_per_step, period)
         self.module, self.kmeta = compile_contact_kernel(model)
         laws, kind = law_kinds(model)
@@ -202,15 +213,16 @@ class ContactIntegrator(Integrator):
         from .integrator import check_event_location
         self.event_location = check_event_location(event_location)
         self.max_pivots = int(max_pivots) if max_pivots is not None else 4 * self.nc + 20
-        self.I, self.R, self.WI, self.WF = pack_tables(self.tables, self.n_state)
-        self.SC = np.zeros((9, self.n_state))
+        self.method = get_method(method)
+        self.I, self.R, self.WI, self.WF = pack_tables(self.tables, self.n_state, method)
+        self.SC = np.zeros((contract.SC_ROWS + max(self.method.stages - 1, 0), self.n_state))
         self.GS = np.zeros((9, max(self.nc, 1), self.kmeta["gmax"]))
         if max([len(k["states"]) for k in self.kmeta["kinds"]] + [0]) > contract.MAX_LAW_STATES:
             raise ValueError(f"a friction law has more than {contract.MAX_LAW_STATES} states")
         if check_stability:
             from .stability import check_step
             h_max, which = self.max_stable_step()
-            check_step(self.period, self.steps_per_period, h_max, which)
+            check_step(self.period, self.steps_per_period, h_max, which, self.method.name)
         self._empty_log = self.log_buffer(0)
 
     # --- modes and states ---------------------------------------------------------------------
@@ -293,7 +305,7 @@ class ContactIntegrator(Integrator):
         return self.WF[N0:N0 + self.nc].copy(), self.WF[f0:f0 + self.nc].copy()
 
     def max_stable_step(self) -> tuple[float, str]:
-        """Largest stable RK4 step over the open configuration and each closed mode of every law.
+        """Largest stable step of the method over the open configuration and each closed mode of every law.
 
         The Jacobians are taken by finite differences of the (affine) flow at rest.
         A rigid stick mode is replaced by slip: a constraint cannot raise the
@@ -324,7 +336,7 @@ class ContactIntegrator(Integrator):
             for lam in np.linalg.eigvals(J):
                 if lam.real > 1e-9 * max(abs(lam), 1.0):
                     continue
-                h = _ray_limit(complex(lam))
+                h = _ray_limit(complex(lam), self.method.amplification)
                 if h < best:
                     best, which = h, self.mode_label(cm)
         return best, which

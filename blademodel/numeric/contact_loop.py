@@ -42,8 +42,10 @@ frequency group), ``ztmp`` (law-state scratch), ``yev`` (state at an event befor
 the friction problem), ``cdr`` (penetration rates), ``tsc`` (the time of ``sg, cg``;
 NaN when none).
 
-``integrate`` also takes ``SC`` (``(9, n_state)``: RK4 stages 0-4, the step's or
-bracket's end 5, the trial 6, the sub-step start 7, ``dy/dt`` at the step's end 8)
+``integrate`` also takes ``SC`` (``(SC_ROWS + s - 1, n_state)``: RK4 stages 0-4, the
+step's or bracket's end 5, the trial 6, the sub-step start 7, ``dy/dt`` at the step's
+end 8, then the stages 1 ... s-1 of a tableau method (``I[H_NS] = s``; its stage 0 is
+row 0))
 and ``GS`` (``(9, nc, GMAX)``: guard values at the step start 0, end 1, trial 2,
 sub-step start 3, bracket start 7, and their rates 4, 5, 6, 8, NaN where unknown).
 The kernel allocates nothing.
@@ -64,7 +66,7 @@ import math  # noqa: F401
 
 from blademodel.numeric.contract import (C_BISECTIONS, C_EVENTS, C_FRICTION_PIVOTS, C_GRAZING, C_LOGGED, C_RECORDS, C_RHS,
                                          C_STEPS, F_B, F_CG, F_D, F_DL, F_F, F_FR, F_L, F_N, F_ND, F_NULL, F_SG,
-                                         F_V, F_X, F_YEV, F_Z, F_DR, F_T, H_N, H_NC, H_NF, H_NG, H_NLAW, MAX_LAW_STATES,
+                                         F_V, F_X, F_YEV, F_Z, F_DR, F_T, H_N, H_NS, R_RK, SC_ROWS, H_NC, H_NF, H_NG, H_NLAW, MAX_LAW_STATES,
                                          O_CI, O_CIDX, O_CLAW, O_CP, O_CSO, O_FG, O_FI, O_KI, O_KP, O_WI, O_WP, R_CV, R_FC,
                                          R_FS, R_GAP, R_GN, R_GR, R_INVM, R_K, R_KV, R_OM, R_W, S_MAX_CONE_RATIO,
                                          STATUS_EVENT_STORM, STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE,
@@ -380,6 +382,44 @@ def rk4_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1):
         out[i] = y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
 
 
+def rk_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1):
+    """One step of the kernel's method: classical RK4 written out, or the tableau in ``R`` (``I[H_NS]`` stages).
+
+    A tableau's stage ``q`` is kept in ``SC[0]`` (``q = 0``, shared as with RK4) or
+    ``SC[SC_ROWS + q - 1]``. Returns the right-hand-side evaluations spent.
+    """
+    s = I[H_NS]
+    if s == 0:
+        rk4_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1)
+        return 3 if have_k1 else 4
+    n = y.shape[0]
+    o = I[R_RK]
+    ob = o + s * s
+    oc = ob + s
+    tmp = SC[4]
+    if not have_k1:
+        rhs(t, y, cm, I, R, WI, WF, SC[0])
+    for st in range(1, s):
+        for i in range(n):
+            tmp[i] = y[i]
+        for q in range(st):
+            a = h * R[o + st * s + q]
+            if a != 0.0:
+                kq = SC[0] if q == 0 else SC[SC_ROWS + q - 1]
+                for i in range(n):
+                    tmp[i] += a * kq[i]
+        rhs(t + R[oc + st] * h, tmp, cm, I, R, WI, WF, SC[SC_ROWS + st - 1])
+    for i in range(n):
+        out[i] = y[i]
+    for q in range(s):
+        bq = h * R[ob + q]
+        if bq != 0.0:
+            kq = SC[0] if q == 0 else SC[SC_ROWS + q - 1]
+            for i in range(n):
+                out[i] += bq * kq[i]
+    return s - 1 if have_k1 else s
+
+
 # ---- guards -------------------------------------------------------------------------------
 def eval_guards(t, y, cm, I, R, WI, WF, G):
     """Every contact's guards into ``G[j, :]``: 0 the penetration, then the law's."""
@@ -443,11 +483,11 @@ def locate_trial(t, y, dt, frac, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counter
     ``SC[0]`` holds ``dy/dt`` at ``(t, y)`` (every trial starts there). Returns the
     first crossing since the start.
     """
-    rk4_step(t, y, frac * dt, cm, I, R, WI, WF, SC, ymid, True)
+    spent = rk_step(t, y, frac * dt, cm, I, R, WI, WF, SC, ymid, True)
     eval_guards(t + frac * dt, ymid, cm, I, R, WI, WF, Gm)
     guard_rates(I, WF, Dm)
     counters[C_BISECTIONS] += 1
-    counters[C_RHS] += 3
+    counters[C_RHS] += spent
     return first_crossing(cm, I, WI, G0, Gm)
 
 
@@ -498,7 +538,7 @@ def hermite_extremum(g0, g1, d0, d1):
     return 0.5 * (lo + hi)
 
 
-def grazing_candidate(cm, I, G0, G1, D0, D1, dt):
+def grazing_candidate(cm, I, G0, G1, D0, D1, dt, width):
     """The earliest fraction of a step at which a guard that did not cross may have crossed and come back.
 
     A guard with known rates that moves toward its crossing at the step's start and
@@ -506,6 +546,8 @@ def grazing_candidate(cm, I, G0, G1, D0, D1, dt):
     extremum inside the step; if the cubic Hermite interpolant of its values and
     rates puts that extremum past zero, the guard crossed and returned within the
     step (a brief contact, a grazing touch). Returns that extremum's fraction, or -1.
+    An extremum within ``width`` (the event tolerance) of the start is the turn of an
+    event just handled there, not a new one: it is passed over.
     """
     nc = I[H_NC]
     claw = vec(I, I, O_CLAW, nc)
@@ -526,7 +568,7 @@ def grazing_candidate(cm, I, G0, G1, D0, D1, dt):
             if rising or falling:
                 s = hermite_extremum(g0, g1, d0, d1)
                 v = hermite(s, g0, g1, d0, d1)[0]
-                if ((rising and v > 0.0) or (falling and v < 0.0)) and (best < 0.0 or s < best):
+                if s > width and ((rising and v > 0.0) or (falling and v < 0.0)) and (best < 0.0 or s < best):
                     best = s
     return best
 
@@ -918,6 +960,7 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
             irec += 1
         for js in range(steps_per_period):
             t_end = period * per + (js + 1) * h
+            tol_t = event_tol * h
             n_events = 0
             while t < t_end:
                 dt = t_end - t
@@ -926,14 +969,14 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                     guard_rates(I, WF, D0)
                     counters[C_RHS] += 1
                 # SC[0] holds dy/dt at (t, y): from the line above or the end of the last step
-                rk4_step(t, y, dt, cm, I, R, WI, WF, SC, y1, True)
+                spent = rk_step(t, y, dt, cm, I, R, WI, WF, SC, y1, True)
                 rhs_guards(t_end, y1, cm, I, R, WI, WF, knext, G1)
                 guard_rates(I, WF, D1)
-                counters[C_RHS] += 4
+                counters[C_RHS] += spent + 1
                 code = first_crossing(cm, I, WI, G0, G1)
                 sub = dt   # the sub-step whose end lies past the event
                 if code < 0 and detect_grazing:
-                    xg = grazing_candidate(cm, I, G0, G1, D0, D1, dt)
+                    xg = grazing_candidate(cm, I, G0, G1, D0, D1, dt, tol_t / dt)
                     if xg > 0.0:
                         Gm, Dm = GS[2], GS[6]
                         code = locate_trial(t, y, dt, xg, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counters)
@@ -953,7 +996,7 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                     if WI[0] > 0:
                         stats[S_MAX_CONE_RATIO] = max(stats[S_MAX_CONE_RATIO], cone_ratio(y, I, R, WI, WF))
                     break
-                hi = locate_event(t, y, sub, cm, I, R, WI, WF, SC, GS, event_tol * h / sub, predicted, counters)
+                hi = locate_event(t, y, sub, cm, I, R, WI, WF, SC, GS, tol_t / sub, predicted, counters)
                 code = first_crossing(cm, I, WI, G0, G1)
                 t_sub = t
                 for i in range(n):
@@ -977,7 +1020,7 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                     eval_guards(t, y, cm, I, R, WI, WF, G1)
                     code = first_crossing(cm, I, WI, Gs, G1)
                     if code < 0:
-                        code = first_near_crossing(cm, I, WI, Gs, G1, t - t_sub, event_tol * h)
+                        code = first_near_crossing(cm, I, WI, Gs, G1, t - t_sub, tol_t)
                 if not settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log_g,
                                     log_from, log_to, recording):
                     counters[C_RECORDS] = irec

@@ -10,6 +10,7 @@ import numpy as np
 from ..model import Model
 from .compiled import compile_model
 from .contract import N_COUNTERS
+from .methods import get_method
 from .stability import check_step, max_stable_step
 
 
@@ -207,6 +208,9 @@ class HybridIntegrator(Integrator):
     event_tol : float
         Events are bracketed to ``event_tol * h``; ``>= 1`` switches at the end of
         the step instead (no location, first order; for comparison).
+    method : {"rk4", "rk8"}
+        Stepping method (:mod:`~blademodel.numeric.methods`): classical RK4 (fused)
+        or an eighth-order Runge-Kutta method (12 stages a step).
     event_location : {"bisection", "predicted"}
         How the bracket is shrunk: by bisection (about ``log2(1 / event_tol)``
         sub-steps an event, the default here, which reproduces the paper pair's
@@ -224,9 +228,12 @@ class HybridIntegrator(Integrator):
 
     def __init__(self, model: Model, *, steps_per_period: int = 1000, event_tol: float = 1e-10,
                  max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
-                 check_stability: bool = True, event_location: str = "bisection"):
+                 check_stability: bool = True, event_location: str = "bisection", method: str = "rk4"):
         self._settings(model, steps_per_period, event_tol, max_events_per_step, period)
         self.event_location = check_event_location(event_location)
+        self.method = get_method(method)
+        # classical RK4 runs fused (an empty tableau); another method steps by its tableau
+        self._tableau = np.zeros(0) if method == "rk4" else self.method.tableau()
         self.compiled = compile_model(model, energy=energy)
         self.module, self.meta = self.compiled.module, self.compiled.meta
         self.p_raw = np.array([model.parameters[n] for n in self.meta["params"]], dtype=float)
@@ -235,9 +242,9 @@ class HybridIntegrator(Integrator):
         self.n_physical = self.n_state - (3 if energy else 0)
         if check_stability:
             h_max, which = max_stable_step(self.module.jacobian, len(self.meta["modes"]), self.p_raw,
-                                           self.n_physical)
+                                           self.n_physical, self.method.amplification)
             check_step(self.period, self.steps_per_period, h_max,
-                       self.meta["modes"][which] if which >= 0 else "-")
+                       self.meta["modes"][which] if which >= 0 else "-", self.method.name)
         self._g = np.empty(self.module.GUARD_DIR.shape[1] + 1)
         self._ytmp = np.empty(self.n_state)
         self._empty_rec = (np.empty(0), np.empty((0, self.n_state)), np.empty(0, dtype=np.int64))
@@ -322,5 +329,5 @@ class HybridIntegrator(Integrator):
         status, mode, t = self.module.integrate(
             y, int(mode), self.p, self.period, self.steps_per_period, int(start_period), int(end_period),
             int(start_period if n_transient is None else n_transient), int(record_every), self.event_tol,
-            self.max_events_per_step, self.event_location == "predicted", rec_t, rec_y, rec_mode, poincare, log_t, log_g, log_f, log_to, counters)
+            self.max_events_per_step, self.event_location == "predicted", self._tableau, rec_t, rec_y, rec_mode, poincare, log_t, log_g, log_f, log_to, counters)
         return int(status), int(mode), float(t)

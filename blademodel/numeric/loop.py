@@ -44,6 +44,36 @@ def rk4_step(mode, t, y, h, p, k1, k2, k3, k4, tmp, out):
         out[i] = y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
 
 
+def rk_step(mode, t, y, h, p, k1, k2, k3, k4, tmp, out, tab, K):
+    """One step of the method: classical RK4 (fused) if ``tab`` is empty, else the tableau ``tab``.
+
+    ``tab`` holds ``A`` (``s x s``, row by row), ``b`` and ``c``; ``K`` has a row per
+    stage. Returns the right-hand-side evaluations spent.
+    """
+    if tab.shape[0] == 0:
+        rk4_step(mode, t, y, h, p, k1, k2, k3, k4, tmp, out)
+        return 4
+    s = K.shape[0]
+    n = y.shape[0]
+    for st in range(s):
+        for i in range(n):
+            tmp[i] = y[i]
+        for q in range(st):
+            a = h * tab[st * s + q]
+            if a != 0.0:
+                for i in range(n):
+                    tmp[i] += a * K[q, i]
+        rhs(mode, t + tab[s * s + s + st] * h, tmp, p, K[st])  # noqa: F821
+    for i in range(n):
+        out[i] = y[i]
+    for q in range(s):
+        bq = h * tab[s * s + q]
+        if bq != 0.0:
+            for i in range(n):
+                out[i] += bq * K[q, i]
+    return s
+
+
 def crossed(g0, g1, direction):
     """Whether a guard went from ``g0`` to ``g1`` through zero in ``direction``.
 
@@ -80,7 +110,7 @@ def earliest_chord(mode, glo, g1, lo, hi):
 
 
 def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp, y1, ymid, g0, g1, gm, glo,
-                 counters):
+                 tab, K, counters):
     """Bracket the earliest crossing of the sub-step ``[t, t + dt]`` below ``event_tol * h``.
 
     ``y1`` and ``g1`` hold the state and guards at the sub-step's end on entry, and
@@ -96,7 +126,8 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
     """
     n = y.shape[0]
     ng = g0.shape[0]
-    width = event_tol * h / dt
+    tol_t = event_tol * h
+    width = tol_t / dt
     for i in range(ng):
         glo[i] = g0[i]
     lo = 0.0
@@ -108,7 +139,7 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
     k = 0
     k_pred = 0
     w_old = 1.0
-    while (hi - lo) * dt > event_tol * h and k < MAX_LOCATE_TRIALS:
+    while (hi - lo) * dt > tol_t and k < MAX_LOCATE_TRIALS:
         if not predicted:
             x = 0.5 * (lo + hi)
         else:
@@ -127,10 +158,9 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
         if not lo < x < hi:
             break   # the bracket is as narrow as the floating-point resolution allows
         k += 1
-        rk4_step(mode, t, y, x * dt, p, k1, k2, k3, k4, tmp, ymid)
+        counters[C_RHS] += rk_step(mode, t, y, x * dt, p, k1, k2, k3, k4, tmp, ymid, tab, K)
         guards(mode, t + x * dt, ymid, p, gm)  # noqa: F821
         counters[C_BISECTIONS] += 1
-        counters[C_RHS] += 4
         c = first_crossing(mode, g0, gm)
         if c >= 0:
             hi = x
@@ -187,7 +217,7 @@ def initial_mode(t, y, p, g, ytmp):
 
 
 def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_transient,
-              record_every, event_tol, max_events, predicted, rec_t, rec_y, rec_mode, poincare, log_t,
+              record_every, event_tol, max_events, predicted, tab, rec_t, rec_y, rec_mode, poincare, log_t,
               log_guard, log_from, log_to, counters):
     """Integrate excitation periods ``start_period`` to ``end_period`` (exclusive).
 
@@ -221,6 +251,9 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
     g1 = np.empty(ng)
     gm = np.empty(ng)
     glo = np.empty(ng)
+    # stages of a tableau method (``tab``: A, b, c; empty for the fused RK4): s^2 + 2 s entries
+    s_tab = int(round(math.sqrt(tab.shape[0] + 1.0))) - 1 if tab.shape[0] > 0 else 0
+    K = np.empty((s_tab, n))
     max_log = log_t.shape[0]
     t = period * start_period
     irec = counters[C_RECORDS]
@@ -238,8 +271,7 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
             n_events = 0
             while t < t_end:
                 dt = t_end - t
-                rk4_step(mode, t, y, dt, p, k1, k2, k3, k4, tmp, y1)
-                counters[C_RHS] += 4
+                counters[C_RHS] += rk_step(mode, t, y, dt, p, k1, k2, k3, k4, tmp, y1, tab, K)
                 if not g0_valid:
                     guards(mode, t, y, p, g0)  # noqa: F821
                 guards(mode, t_end, y1, p, g1)  # noqa: F821
@@ -253,7 +285,7 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
                     t = t_end
                     break
                 hi = locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp, y1, ymid,
-                                  g0, g1, gm, glo, counters)
+                                  g0, g1, gm, glo, tab, K, counters)
                 gi = first_crossing(mode, g0, g1)
                 t_sub = t
                 for i in range(n):

@@ -22,7 +22,8 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
              check_stability: bool = True, raise_on_error: bool = True,
              length_scale: float | None = None, progress=None, chunk_periods: int = 50,
              mode0=None, kernel: str = "auto", record_forces: bool = True,
-             detect_grazing: bool = True, event_location: str | None = None) -> SimulationResult:
+             detect_grazing: bool = True, event_location: str | None = None,
+             method: str = "rk4") -> SimulationResult:
     """Integrate ``model`` from rest with fixed-step RK4 and located events.
 
     Parameters
@@ -73,6 +74,9 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
         one step, which neither end of the step shows (``docs/solver.md``; counter
         ``grazing_events``). The product-mode kernel (the pair's default) does not
         look for them: pass ``kernel="contact"``.
+    method : {"rk4", "rk8"}
+        Stepping method: classical RK4 or an eighth-order Runge-Kutta method
+        (:mod:`~blademodel.numeric.methods`), both through the same event location.
     event_location : {"bisection", "predicted"}, optional
         How events are bracketed; by default bisection on the product-mode kernel
         (the pair's published results, bit for bit) and predicted roots on the
@@ -100,7 +104,7 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
         extra["event_location"] = event_location
     integ = make_integrator(model, kernel=kernel, steps_per_period=steps_per_period, event_tol=event_tol,
                             max_events_per_step=max_events_per_step, energy=energy, period=period,
-                            check_stability=check_stability, **extra)
+                            check_stability=check_stability, method=method, **extra)
     per_contact = integ.kernel == "contact"
     T, n, meta = integ.period, integ.n_state, integ.meta
     y = integ.initial_state(y0)
@@ -165,7 +169,7 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
         settings={"periods": periods, "transient": transient, "steps_per_period": steps_per_period,
                   "event_tol": event_tol, "record_every": record_every,
                   "kernel": integ.kernel, "detect_grazing": bool(extra.get("detect_grazing", False)),
-                  "event_location": integ.event_location},
+                  "event_location": integ.event_location, "method": method},
         contacts=contact, final_contact_modes=np.asarray(mode).copy() if per_contact else None)
     if status != 0 and raise_on_error:
         raise SimulationError(message, result)

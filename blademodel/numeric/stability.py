@@ -1,4 +1,4 @@
-"""RK4's stability limit from the stiffest mode of a model."""
+"""The stepping method's stability limit from the stiffest mode of a model (RK4 by default)."""
 
 from __future__ import annotations
 
@@ -16,24 +16,25 @@ def rk4_amplification(z: np.ndarray) -> np.ndarray:
     return 1 + z + z ** 2 / 2 + z ** 3 / 6 + z ** 4 / 24
 
 
-def _ray_limit(lam: complex) -> float:
-    """Largest ``h`` with ``|R(h lam)| <= 1`` along the ray of ``lam``."""
+def _ray_limit(lam: complex, amplification=rk4_amplification) -> float:
+    """Largest ``h`` with ``|R(h lam)| <= 1`` along the ray of ``lam`` (``R``: ``amplification``)."""
     if abs(lam) == 0.0:
         return math.inf
-    lo, hi = 0.0, 4.0 / abs(lam)  # the region lies within |z| < 3
-    if abs(rk4_amplification(hi * lam)) <= 1.0:
+    lo, hi = 0.0, 10.0 / abs(lam)  # the regions of RK4 and RK8 lie within |z| < 3 and < 7
+    if abs(amplification(hi * lam)) <= 1.0:
         return math.inf  # only for Re(lam) > 0 would this fail: growth is then physical
     for _ in range(60):
         mid = 0.5 * (lo + hi)
-        if abs(rk4_amplification(mid * lam)) <= 1.0 + 1e-12:
+        if abs(amplification(mid * lam)) <= 1.0 + 1e-12:
             lo = mid
         else:
             hi = mid
     return lo
 
 
-def max_stable_step(jacobian, n_modes: int, p: np.ndarray, n_state: int) -> tuple[float, int]:
-    """Largest stable RK4 step over every mode, and the mode that sets it.
+def max_stable_step(jacobian, n_modes: int, p: np.ndarray, n_state: int,
+                    amplification=rk4_amplification) -> tuple[float, int]:
+    """Largest stable step over every mode, and the mode that sets it.
 
     Parameters
     ----------
@@ -44,6 +45,8 @@ def max_stable_step(jacobian, n_modes: int, p: np.ndarray, n_state: int) -> tupl
         Raw parameter vector.
     n_state : int
         Number of physical states (the Jacobian's size).
+    amplification : callable
+        The method's stability function (default RK4's).
     """
     best, which = math.inf, -1
     for mode in range(n_modes):
@@ -51,17 +54,17 @@ def max_stable_step(jacobian, n_modes: int, p: np.ndarray, n_state: int) -> tupl
         for lam in np.linalg.eigvals(J):
             if lam.real > 1e-9 * max(abs(lam), 1.0):
                 continue  # an unstable physical mode: no step makes it decay
-            h = _ray_limit(complex(lam))
+            h = _ray_limit(complex(lam), amplification)
             if h < best:
                 best, which = h, mode
     return best, which
 
 
-def check_step(period: float, steps_per_period: int, h_max: float, mode_name: str) -> None:
+def check_step(period: float, steps_per_period: int, h_max: float, mode_name: str, method: str = "rk4") -> None:
     """Raise :class:`StepTooLargeError` if ``period / steps_per_period > h_max``."""
     h = period / steps_per_period
     if h > h_max:
         need = math.ceil(period / h_max)
         raise StepTooLargeError(
-            f"steps_per_period = {steps_per_period} gives h = {h:.3e} s, above RK4's stability "
+            f"steps_per_period = {steps_per_period} gives h = {h:.3e} s, above {method.upper()}'s stability "
             f"limit {h_max:.3e} s set by mode '{mode_name}'; use steps_per_period >= {need}")
