@@ -133,12 +133,13 @@ class CKernel:
 
 def kernel_runner(integ, y0, mode0: int, start: int, end: int):
     """A closure running the compiled kernel over periods ``[start, end)`` from a copy of ``y0``."""
+    from blademodel.numeric.contract import N_COUNTERS
     n = integ.n_state
     po = np.empty((end - start, n))
 
     def run():
         y = np.array(y0, dtype=float)
-        c = np.zeros(6, dtype=np.int64)
+        c = np.zeros(N_COUNTERS, dtype=np.int64)
         st, mode, _ = integ.advance(y, mode0, start, end, poincare=po, counters=c)
         return st, y, mode, c
     return run

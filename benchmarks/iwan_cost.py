@@ -21,13 +21,14 @@ import numpy as np
 
 from blademodel.config import BladePair
 from blademodel.numeric import HybridIntegrator
+from blademodel.numeric.contract import N_COUNTERS
 
 
 def per_step(integ: HybridIntegrator, periods: int) -> tuple[float, int, int]:
     """Seconds per step of one run of ``periods`` from rest, its steps and events."""
     y = integ.initial_state()
     mode = integ.mode_of(y)
-    counters = np.zeros(6, dtype=np.int64)
+    counters = np.zeros(N_COUNTERS, dtype=np.int64)
     t0 = time.perf_counter()
     status, _, _ = integ.advance(y, mode, 0, periods, counters=counters)
     dt = time.perf_counter() - t0

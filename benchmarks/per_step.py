@@ -49,6 +49,7 @@ import _common as C  # noqa: E402
 from blademodel.config import BladePair  # noqa: E402
 from blademodel.numeric import HybridIntegrator, simulate  # noqa: E402
 from blademodel.numeric.reference import simulate_reference  # noqa: E402
+from blademodel.numeric.contract import N_COUNTERS  # noqa: E402
 
 CASES = [("coulomb P1", dict(friction="coulomb")),
          ("bilinear P1", dict(friction="bilinear")),
@@ -75,9 +76,9 @@ def generic_runner(mod, integ, y0, mode0, start, end):
 
     def run():
         y = np.array(y0, dtype=float)
-        c = np.zeros(6, dtype=np.int64)
+        c = np.zeros(N_COUNTERS, dtype=np.int64)
         st, mode, _ = mod.integrate(y, mode0, integ.p, integ.period, integ.steps_per_period, start, end, start, 1,
-                                    integ.event_tol, integ.max_events_per_step, *args, c)
+                                    integ.event_tol, integ.max_events_per_step, False, np.zeros(0), *args, c)
         return st, y, mode, c
     return run
 
@@ -88,7 +89,7 @@ from blademodel.config import BladePair
 from blademodel.numeric import HybridIntegrator
 cfg = BladePair(**{cfg})
 integ = HybridIntegrator(cfg.build(), steps_per_period={S}, event_tol={TOL})
-y = integ.initial_state(); c = np.zeros(6, dtype=np.int64)
+y = integ.initial_state(); c = np.zeros(8, dtype=np.int64)
 t0 = time.thread_time()
 st, mode, _ = integ.advance(y, integ.mode_of(y), 0, {P}, counters=c)
 dt = time.thread_time() - t0
