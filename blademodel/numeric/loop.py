@@ -96,6 +96,17 @@ def first_crossing(mode, g0, g1):
     return -1
 
 
+def inverse_quadratic(xa, ga, xb, gb, xc, gc, lo, hi):
+    """Root estimate from the last points of a guard: inverse quadratic through three (``xc`` may be NaN:
+    two), else the secant through ``a`` and ``b``, else the bracket's middle."""
+    if math.isfinite(xc) and ga != gb and ga != gc and gb != gc:
+        return (xa * gb * gc / ((ga - gb) * (ga - gc)) + xb * ga * gc / ((gb - ga) * (gb - gc))
+                + xc * ga * gb / ((gc - ga) * (gc - gb)))
+    if gb != ga:
+        return xb - gb * (xb - xa) / (gb - ga)
+    return 0.5 * (lo + hi)
+
+
 def earliest_chord(mode, glo, g1, lo, hi):
     """The crossed guard of ``mode`` whose chord between ``lo`` and ``hi`` crosses zero first, and that point."""
     best = -1
@@ -136,6 +147,7 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
     if gi < 0:
         gi = first_crossing(mode, g0, g1)
     xa, ga, xb, gb = lo, glo[gi], hi, g1[gi]
+    xc, gc = math.nan, math.nan
     k = 0
     k_pred = 0
     w_old = 1.0
@@ -144,7 +156,7 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
             x = 0.5 * (lo + hi)
         else:
             if k > k_pred:
-                x = xb - gb * (xb - xa) / (gb - ga) if gb != ga else 0.5 * (lo + hi)
+                x = inverse_quadratic(xa, ga, xb, gb, xc, gc, lo, hi)
                 if k % 2 == 0:
                     if hi - lo > 0.5 * w_old:
                         x = 0.5 * (lo + hi)
@@ -177,8 +189,10 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
             if gi < 0:
                 gi = c
             xa, ga, xb, gb = lo, glo[gi], hi, g1[gi]
+            xc, gc = math.nan, math.nan
             k_pred = k
             continue
+        xc, gc = xa, ga
         xa, ga = xb, gb
         xb, gb = x, gm[gi]
     return hi
