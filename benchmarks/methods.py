@@ -61,7 +61,7 @@ def main(argv=None):
         cfg = BladePair(friction=law)
         model = cfg.build()
         ref, _ = runner(model, "rk8", "predicted", 16000, args.periods)()
-        scale = C.scale_vector(cfg, 10 if law == "bilinear" else 8)
+        scale = C.scale_vector(cfg, len(ref))
         funcs, rows = {}, []
         for name, (method, loc, steps) in CONFIGS.items():
             for S in steps:
@@ -100,6 +100,7 @@ def main(argv=None):
 
 def _plot(out, png):
     import matplotlib
+    import matplotlib.ticker
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
@@ -109,6 +110,7 @@ def _plot(out, png):
             ax.loglog([r["cpu_s"] for r in rs], [max(r["error"], 1e-16) for r in rs], "o-", label=name)
         ax.set_title(f"{law} pair, {out['periods']} periods")
         ax.set_xlabel("CPU time (s)")
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_ylabel("final-state error (units of the gap)")
     axes[0].legend()
