@@ -25,7 +25,7 @@ import sympy as sp
 from sympy.printing.pycode import PythonCodePrinter
 
 from ..symbolic.system import HybridSystem
-from . import loop
+from . import bracket, loop
 
 
 class _Printer(PythonCodePrinter):
@@ -256,6 +256,8 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
     L.append(f"OPEN_MODE = {system.open_mode}")
     L.append("")
 
+    L.append("# ---- event bracketing (blademodel/numeric/bracket.py) ----")
+    L.append(inspect.getsource(bracket))
     L.append("# ---- generic loop (blademodel/numeric/loop.py) ----")
     L.append(inspect.getsource(loop))
     L.append("")
@@ -263,7 +265,7 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
     full_state = list(state) + [sp.Symbol(f"_energy_{i}") for i in range(n_state - len(state))]
     L += fused_rk4_source(flow_cses, full_state, t, {**pnames, **const_names})
     L.append("")
-    for fn in ("rhs", "guards", "transition", "rk4_step", "rk_step", "crossed", "first_crossing", "inverse_quadratic", "earliest_chord",
+    for fn in ("rhs", "guards", "transition", "rk4_step", "rk_step", "crossed", "first_crossing", "inverse_quadratic", "safeguarded_trial", "earliest_chord",
                "locate_event", "simultaneous_crossing", "initial_mode",
                "integrate"):
         L.append(f"{fn} = njit(cache=True)({fn})")

@@ -90,7 +90,7 @@ def _code_version() -> str:
     """
     if not _CODE_VERSION:
         here = PACKAGE / "numeric"
-        files = [here / "codegen.py", here / "loop.py", here / "jacobian.py", here / "contract.py",
+        files = [here / "codegen.py", here / "bracket.py", here / "loop.py", here / "jacobian.py", here / "contract.py",
                  *package_sources("symbolic", "components", "components/friction")]
         _CODE_VERSION.append(hash_sources(files, library_versions()))
     return _CODE_VERSION[0]

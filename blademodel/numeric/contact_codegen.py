@@ -13,7 +13,7 @@ import inspect
 import re
 
 from ..components.friction.base import FrictionLaw
-from . import contact_loop, contact_rigid_stubs
+from . import bracket, contact_loop, contact_rigid_stubs
 from .law_codegen import law_code
 
 #: Functions compiled with Numba (``njit(cache=True)``).
@@ -30,7 +30,7 @@ _TEMPLATE_FUNCTIONS = ("runtime", "vec", "mat", "wvec", "law_offset", "record", 
                        "contact_forces", "rates", "rhs", "rhs_guards", "rk4_step", "rk_step", "guards_of_forces", "eval_guards",
                        "crossed", "first_crossing", "cone_ratio", "first_near_crossing", "guard_rates",
                        "locate_trial", "copy_guards", "hermite", "hermite_root", "hermite_extremum",
-                       "grazing_candidate", "predicted_root",
+                       "grazing_candidate", "inverse_quadratic", "safeguarded_trial", "predicted_root",
                        "earliest_crossing", "locate_event", "apply_transition", "project_onto_stick", "resolve_friction",
                        "rigid_problem", "log_event", "settle_event", "initial_modes", "integrate")
 
@@ -123,6 +123,8 @@ def generate_contact_kernel(laws: list[FrictionLaw]) -> tuple[str, dict]:
     L.append(f"RIGID = np.array({table(rigid)}, dtype=np.int64).reshape({nk}, 3)")
     L.append(f"NSTATES = np.array({table(nst)}, dtype=np.int64)")
     L.append("")
+    L.append("# ---- event bracketing (blademodel/numeric/bracket.py) ----")
+    L.append(inspect.getsource(bracket))
     L.append("# ---- the per-contact loop (blademodel/numeric/contact_loop.py) ----")
     L.append(expand_views(inspect.getsource(contact_loop)))
     L.append("")

@@ -37,7 +37,7 @@ _MEMO: dict = {}
 def _code_version() -> str:
     """Hash of the template, the generators, the contract and the package's friction laws."""
     here = PACKAGE / "numeric"
-    return hash_sources([here / n for n in ("contact_loop.py", "contact_rigid_stubs.py", "contact_codegen.py",
+    return hash_sources([here / n for n in ("bracket.py", "contact_loop.py", "contact_rigid_stubs.py", "contact_codegen.py",
                                             "law_codegen.py", "contract.py")]
                         + package_sources("components/friction"))
 

@@ -636,6 +636,7 @@ def locate_event(t, y, dt, cm, I, R, WI, WF, SC, GS, width, predicted, counters)
     k = 0
     w_old = 1.0
     k_pred = 0
+    halve = False
     while hi - lo > width and k < MAX_LOCATE_TRIALS:
         if not predicted:
             x = 0.5 * (lo + hi)   # bisection (for comparison: the product kernel's default)
@@ -643,20 +644,16 @@ def locate_event(t, y, dt, cm, I, R, WI, WF, SC, GS, width, predicted, counters)
             if math.isfinite(slope) and slope != 0.0:
                 x = xb - gb / slope
                 slope = math.nan
-            elif gb != ga:
-                x = xb - gb * (xb - xa) / (gb - ga)
             else:
-                x = 0.5 * (lo + hi)
+                x = inverse_quadratic(xa, ga, xb, gb, math.nan, math.nan, lo, hi)  # noqa: F821 (the secant)
             if k % 2 == 0:
-                if hi - lo > 0.5 * w_old:
-                    x = 0.5 * (lo + hi)
+                halve = hi - lo > 0.5 * w_old
                 w_old = hi - lo
-        if not lo < x < hi:
+        if predicted:
+            x = safeguarded_trial(x, lo, hi, width, halve)  # noqa: F821
+            halve = False
+        elif not lo < x < hi:
             x = 0.5 * (lo + hi)
-        if predicted and x - lo < 0.5 * width:
-            x = min(lo + 0.75 * width, 0.5 * (lo + hi)) if hi - lo > 1.5 * width else lo + 0.75 * width
-        elif predicted and hi - x < 0.5 * width:
-            x = max(hi - 0.75 * width, 0.5 * (lo + hi)) if hi - lo > 1.5 * width else hi - 0.75 * width
         if not lo < x < hi:
             break   # the bracket is as narrow as the floating-point resolution allows
         k += 1

@@ -96,17 +96,6 @@ def first_crossing(mode, g0, g1):
     return -1
 
 
-def inverse_quadratic(xa, ga, xb, gb, xc, gc, lo, hi):
-    """Root estimate from the last points of a guard: inverse quadratic through three (``xc`` may be NaN:
-    two), else the secant through ``a`` and ``b``, else the bracket's middle."""
-    if math.isfinite(xc) and ga != gb and ga != gc and gb != gc:
-        return (xa * gb * gc / ((ga - gb) * (ga - gc)) + xb * ga * gc / ((gb - ga) * (gb - gc))
-                + xc * ga * gb / ((gc - ga) * (gc - gb)))
-    if gb != ga:
-        return xb - gb * (xb - xa) / (gb - ga)
-    return 0.5 * (lo + hi)
-
-
 def earliest_chord(mode, glo, g1, lo, hi):
     """The crossed guard of ``mode`` whose chord between ``lo`` and ``hi`` crosses zero first, and that point."""
     best = -1
@@ -155,18 +144,13 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
         if not predicted:
             x = 0.5 * (lo + hi)
         else:
+            halve = False
             if k > k_pred:
-                x = inverse_quadratic(xa, ga, xb, gb, xc, gc, lo, hi)
+                x = inverse_quadratic(xa, ga, xb, gb, xc, gc, lo, hi)  # noqa: F821
                 if k % 2 == 0:
-                    if hi - lo > 0.5 * w_old:
-                        x = 0.5 * (lo + hi)
+                    halve = hi - lo > 0.5 * w_old
                     w_old = hi - lo
-            if not lo < x < hi:
-                x = 0.5 * (lo + hi)
-            if x - lo < 0.5 * width:
-                x = lo + 0.75 * width
-            elif hi - x < 0.5 * width:
-                x = hi - 0.75 * width
+            x = safeguarded_trial(x, lo, hi, width, halve)  # noqa: F821
         if not lo < x < hi:
             break   # the bracket is as narrow as the floating-point resolution allows
         k += 1
