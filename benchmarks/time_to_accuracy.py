@@ -8,6 +8,10 @@ target error 1e-4 ... 1e-10 (max over the state of |y - y_ref| / (gap, gap*omega
 the paper's units), the cheapest run that reaches it:
 
 * the kernel with ``steps_per_period`` from the ladder 250 ... 48000 (event_tol 1e-10);
+* the kernel with ``method="rk8"`` and predicted event roots (``event_location``), S from
+  200 ... 2000 (event_tol 1e-13, so the location never limits it); the last columns
+  compare ``solve_ivp`` with the cheaper of the two kernel runs (the higher-order method
+  where it wins);
 * the C baseline (benchmarks/rk4_blades.c, gcc -O3) at the kernel's S (same error);
 * ``solve_ivp`` (DOP853 with events and restarts, ``numeric/reference.py``) with
   rtol from the ladder 1e-4 ... 1e-11 (atol = rtol * (gap, gap*omega)).
@@ -38,6 +42,7 @@ from blademodel.numeric.reference import simulate_reference  # noqa: E402
 PERIODS = 200
 TARGETS = [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10]
 S_LADDER = [250, 500, 1000, 2000, 4000, 8000, 16000, 32000, 48000]
+S8_LADDER = [200, 250, 350, 500, 700, 1000, 1400, 2000]
 RTOLS = [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11]
 TOL = 1e-10
 
@@ -52,8 +57,8 @@ def main(argv=None):
     model = cfg.build()
     T = cfg.period
 
-    def integ(S, tol=TOL):
-        return HybridIntegrator(model, steps_per_period=S, event_tol=tol, check_stability=False)
+    def integ(S, tol=TOL, **kw):
+        return HybridIntegrator(model, steps_per_period=S, event_tol=tol, check_stability=False, **kw)
 
     i0 = integ(1000)
     y0 = i0.initial_state()
@@ -69,10 +74,15 @@ def main(argv=None):
     ckern = C.CKernel(("-O3",))
     kr = {S: C.kernel_runner(integ(S), y0, m0, 0, PERIODS) for S in S_LADDER}
     krun = {S: f() for S, f in kr.items()}
+    k8 = {S: C.kernel_runner(integ(S, 1e-13, method="rk8", event_location="predicted"), y0, m0, 0, PERIODS)
+          for S in S8_LADDER}
+    k8run = {S: f() for S, f in k8.items()}
     funcs = {}
     for S in S_LADDER:
         funcs[("k", S)] = kr[S]
         funcs[("c", S)] = (lambda S=S: ckern.run(cfg, model, y0, m0, i0.period, S, 0, PERIODS, TOL))
+    for S in S8_LADDER:
+        funcs[("k8", S)] = k8[S]
     cpu = C.interleaved(funcs, 2)
     wall = C.interleaved(funcs, 1, clock=time.perf_counter)
     kern_rows = []
@@ -80,6 +90,11 @@ def main(argv=None):
         st, y, _, c = krun[S]
         kern_rows.append(dict(S=S, error=C.state_error(y, y_ref, sc) if st == 0 else np.inf, rhs=int(c[3]),
                               cpu=min(cpu[("k", S)]), wall=min(wall[("k", S)]), c_cpu=min(cpu[("c", S)])))
+    rk8_rows = []
+    for S in S8_LADDER:
+        st, y, _, c = k8run[S]
+        rk8_rows.append(dict(S=S, error=C.state_error(y, y_ref, sc) if st == 0 else np.inf, rhs=int(c[3]),
+                             events=int(c[1]), cpu=min(cpu[("k8", S)]), wall=min(wall[("k8", S)])))
     print(f"kernel ladder done ({time.time() - t_start:.0f} s)", flush=True)
 
     # solve_ivp ladder (stops once the smallest target is reached)
@@ -106,6 +121,12 @@ def main(argv=None):
                          wall_ratio=(v["wall"] / k["wall"]) if (k and v) else None,
                          rhs_ratio=(v["rhs"] / k["rhs"]) if (k and v) else None,
                          k_vs_default=k and k["cpu"] / next(r["cpu"] for r in kern_rows if r["S"] == 1000)))
+        k8 = min((r for r in rk8_rows if r["error"] <= E), key=lambda r: r["cpu"], default=None)
+        best = min([r for r in (k, k8) if r], key=lambda r: r["cpu"], default=None)
+        rows[-1].update(S8=k8 and k8["S"], k8_err=k8 and k8["error"],
+                        rk4_over_rk8=(k["cpu"] / k8["cpu"]) if (k and k8) else None,
+                        best="rk8" if best is not None and best is k8 else ("rk4" if best else None),
+                        cpu_ratio_best=(v["cpu"] / best["cpu"]) if (best and v) else None)
     la = C.print_load("at end")
     print(f"\n{args.law}, defaults, {PERIODS} periods from rest; cheapest run reaching each target "
           "(kernel event_tol 1e-10; '-' = not reached by the ladder)")
@@ -114,11 +135,16 @@ def main(argv=None):
                          ("rtol", "ivp rtol", ".0e"), ("v_err", "its error", ".1e"),
                          ("cpu_ratio", "ivp/kernel CPU", ".0f"), ("wall_ratio", "ivp/kernel wall", ".0f"),
                          ("rhs_ratio", "ivp/kernel rhs evals", ".2f")]))
+    print("\nwith the eighth-order method (RK8, predicted event roots, event_tol 1e-13) where it is cheaper")
+    print(C.table(rows, [("target", "target error", ".0e"), ("S8", "RK8 S", "d"), ("k8_err", "its error", ".1e"),
+                         ("rk4_over_rk8", "RK4/RK8 CPU", ".1f"), ("best", "cheaper", ""),
+                         ("cpu_ratio_best", "ivp/best kernel CPU", ".0f")]))
     tight = ivp_rows[-1]
     print(f"\nreference vs tightest solve_ivp (rtol {tight['rtol']:.0e}): {tight['error']:.1e}")
     out = {"benchmark": "time_to_accuracy", "law": args.law, "periods": PERIODS, "event_tol": TOL,
            "machine": C.machine(), "load_end": la, "targets": rows, "kernel_ladder": kern_rows,
-           "ivp_ladder": ivp_rows, "reference": "Richardson(S=32000, 64000, event_tol 1e-13)",
+           "ivp_ladder": ivp_rows, "rk8_ladder": rk8_rows,
+           "reference": "Richardson(S=32000, 64000, event_tol 1e-13)",
            "elapsed_s": time.time() - t_start}
     name = "time_to_accuracy" + ("" if args.law == "coulomb" else f"_{args.law}")
     path = C.write_json(name, out)
