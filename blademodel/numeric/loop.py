@@ -154,7 +154,11 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
         if not lo < x < hi:
             break   # the bracket is as narrow as the floating-point resolution allows
         k += 1
-        counters[C_RHS] += rk_step(mode, t, y, x * dt, p, k1, k2, k3, k4, tmp, ymid, tab, K)
+        if tab.shape[0] == 0:
+            rk4_step(mode, t, y, x * dt, p, k1, k2, k3, k4, tmp, ymid)
+            counters[C_RHS] += 4
+        else:
+            counters[C_RHS] += rk_step(mode, t, y, x * dt, p, k1, k2, k3, k4, tmp, ymid, tab, K)
         guards(mode, t + x * dt, ymid, p, gm)  # noqa: F821
         counters[C_BISECTIONS] += 1
         c = first_crossing(mode, g0, gm)
@@ -269,7 +273,11 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
             n_events = 0
             while t < t_end:
                 dt = t_end - t
-                counters[C_RHS] += rk_step(mode, t, y, dt, p, k1, k2, k3, k4, tmp, y1, tab, K)
+                if tab.shape[0] == 0:   # the fused RK4 called directly: the hot path has no extra call
+                    rk4_step(mode, t, y, dt, p, k1, k2, k3, k4, tmp, y1)
+                    counters[C_RHS] += 4
+                else:
+                    counters[C_RHS] += rk_step(mode, t, y, dt, p, k1, k2, k3, k4, tmp, y1, tab, K)
                 if not g0_valid:
                     guards(mode, t, y, p, g0)  # noqa: F821
                 guards(mode, t_end, y1, p, g1)  # noqa: F821
