@@ -265,7 +265,8 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
     full_state = list(state) + [sp.Symbol(f"_energy_{i}") for i in range(n_state - len(state))]
     L += fused_rk4_source(flow_cses, full_state, t, {**pnames, **const_names})
     L.append("")
-    for fn in ("rhs", "guards", "transition", "rk4_step", "rk_step", "crossed", "first_crossing", "inverse_quadratic", "safeguarded_trial", "earliest_chord",
+    for fn in ("rhs", "guards", "transition", "rk4_step", "stage_sum", "rk_step", "crossed", "first_crossing",
+               "inverse_quadratic", "safeguarded_trial", "earliest_chord",
                "locate_event", "simultaneous_crossing", "initial_mode",
                "integrate"):
         L.append(f"{fn} = njit(cache=True)({fn})")

@@ -64,8 +64,8 @@ def expand_views(source: str) -> str:
     """``source`` with every call of a view helper written out as the slice it returns.
 
     The helpers document the buffer layout; written out, the slices cost Numba
-    nothing to inline (``inline='always'`` types each inlined body again: a tenth of
-    the compile time). Their definitions stay in the module, unused.
+    nothing to inline (``inline='always'`` types each inlined body again: 8 % of the
+    compile time in a profile). Their definitions stay in the module, unused.
     """
     def one(m):
         args = [a.strip() for a in m.group(2).split(",")]

@@ -42,9 +42,9 @@ def project_onto_stick(y, I, R, WI, WF):
 def rigid_problem(cm, I, WI):
     """No rigid contact: no friction problem (``U`` cleared)."""
     nc = I[H_NC]
-    o = 2 + 2 * nc
+    U = wvec(WI, nc, 2)  # noqa: F821 (the template's view, defined before this file)
     for j in range(nc):
-        WI[o + j] = 0
+        U[j] = 0
     return False
 
 

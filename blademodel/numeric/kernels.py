@@ -25,14 +25,19 @@ def choose_kernel(model: Model, kernel: str = "auto") -> str:
     return kernel
 
 
-def make_integrator(model: Model, *, kernel: str = "auto", **settings):
+def make_integrator(model: Model, *, kernel: str = "auto", detect_grazing: bool = True,
+                    event_location: str | None = None, **settings):
     """The integrator of ``model`` for ``kernel`` (see :func:`choose_kernel`).
 
     ``settings`` go to :class:`~blademodel.numeric.integrator.HybridIntegrator` or
-    :class:`~blademodel.numeric.contact_kernel.ContactIntegrator`.
+    :class:`~blademodel.numeric.contact_kernel.ContactIntegrator`; ``detect_grazing``
+    to the per-contact kernel only (the product kernel does not look for grazing);
+    ``event_location`` (None: each kernel's default) to either.
     """
+    if event_location is not None:
+        settings["event_location"] = event_location
     if choose_kernel(model, kernel) == "product":
         from .integrator import HybridIntegrator
         return HybridIntegrator(model, **settings)
     from .contact_kernel import ContactIntegrator
-    return ContactIntegrator(model, **settings)
+    return ContactIntegrator(model, detect_grazing=detect_grazing, **settings)

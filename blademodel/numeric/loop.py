@@ -54,24 +54,23 @@ def rk_step(mode, t, y, h, p, k1, k2, k3, k4, tmp, out, tab, K):
         rk4_step(mode, t, y, h, p, k1, k2, k3, k4, tmp, out)
         return 4
     s = K.shape[0]
-    n = y.shape[0]
     for st in range(s):
-        for i in range(n):
-            tmp[i] = y[i]
-        for q in range(st):
-            a = h * tab[st * s + q]
-            if a != 0.0:
-                for i in range(n):
-                    tmp[i] += a * K[q, i]
+        stage_sum(y, h, tab, st * s, st, K, tmp)                 # y + h sum_q a[st, q] k_q
         rhs(mode, t + tab[s * s + s + st] * h, tmp, p, K[st])  # noqa: F821
+    stage_sum(y, h, tab, s * s, s, K, out)                       # y + h sum_q b_q k_q
+    return s
+
+
+def stage_sum(y, h, tab, o, count, K, out):
+    """``out = y + h sum_{q < count} tab[o + q] K[q]`` (zero coefficients skipped)."""
+    n = y.shape[0]
     for i in range(n):
         out[i] = y[i]
-    for q in range(s):
-        bq = h * tab[s * s + q]
-        if bq != 0.0:
+    for q in range(count):
+        a = h * tab[o + q]
+        if a != 0.0:
             for i in range(n):
-                out[i] += bq * K[q, i]
-    return s
+                out[i] += a * K[q, i]
 
 
 def crossed(g0, g1, direction):

@@ -11,7 +11,7 @@ from ..model import Model
 from .contract import (C_LOGGED, C_RECORDS, COUNTER_NAMES, N_COUNTERS, N_STATS, S_MAX_CONE_RATIO, STAT_NAMES,
                        STATUS_EVENT_STORM, STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE, STATUS_OK)
 from .integrator import HybridIntegrator, excitation_period  # noqa: F401  (re-exported)
-from .kernels import choose_kernel, make_integrator
+from .kernels import make_integrator
 from .limits import check_run_length
 from .result import SimulationError, SimulationResult
 
@@ -99,12 +99,10 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
     check_run_length(model, periods=periods, transient=transient, steps_per_period=steps_per_period,
                      record_every=record_every, energy=energy)
     periods, transient, record_every = int(periods), int(transient), int(record_every)
-    extra = {"detect_grazing": detect_grazing} if choose_kernel(model, kernel) == "contact" else {}
-    if event_location is not None:
-        extra["event_location"] = event_location
     integ = make_integrator(model, kernel=kernel, steps_per_period=steps_per_period, event_tol=event_tol,
                             max_events_per_step=max_events_per_step, energy=energy, period=period,
-                            check_stability=check_stability, method=method, **extra)
+                            check_stability=check_stability, method=method, detect_grazing=detect_grazing,
+                            event_location=event_location)
     per_contact = integ.kernel == "contact"
     T, n, meta = integ.period, integ.n_state, integ.meta
     y = integ.initial_state(y0)
@@ -168,7 +166,7 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
         status=int(status), message=message, length_scale=length_scale,
         settings={"periods": periods, "transient": transient, "steps_per_period": steps_per_period,
                   "event_tol": event_tol, "record_every": record_every,
-                  "kernel": integ.kernel, "detect_grazing": bool(extra.get("detect_grazing", False)),
+                  "kernel": integ.kernel, "detect_grazing": getattr(integ, "detect_grazing", False),
                   "event_location": integ.event_location, "method": method},
         contacts=contact, final_contact_modes=np.asarray(mode).copy() if per_contact else None)
     if status != 0 and raise_on_error:

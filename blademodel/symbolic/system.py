@@ -113,22 +113,13 @@ class SymbolicModel:
 class HybridSystem(SymbolicModel):
     """Symbolic hybrid system derived from a :class:`~blademodel.model.Model`.
 
+    It has the attributes of :class:`SymbolicModel`, and those below.
+
     Attributes
     ----------
-    model : Model
-    t : sympy.Symbol
-    q, u : list of sympy.Symbol
-        Coordinates and their velocities (``x1`` and ``vx1``).
-    s : list of sympy.Symbol
-        Internal states of the friction laws.
-    params : list of sympy.Symbol
-        Parameters in the order of ``model.parameters``.
-    mass_matrix : sympy.Matrix
     generalized_forces : dict
         Per mode name: ``M q'' = F`` right-hand side with ``N_c`` and ``f_c`` kept as
         symbols, for display.
-    normal_symbols, friction_symbols : list of sympy.Symbol
-        ``N_c``, ``f_c`` per contact (display only).
     modes : list of Mode
     open_mode : int
         Index of the mode with every contact open.
