@@ -45,11 +45,16 @@ def test_pair_events_are_the_bisection_roots(law):
 
 @pytest.mark.parametrize("law", ["none", "coulomb", "bilinear"])
 def test_a_mistuned_ring_locates_each_event_in_a_few_sub_steps(law):
-    """Every event of a mistuned ring is located on its own (no shared roots) in at most ~4 sub-steps."""
+    """Every event of a mistuned ring is located on its own (no shared roots) in at most 4 sub-steps on average.
+
+    Guards with known rates (the penetration, slip velocities, explicit friction forces, and the
+    rigid stick forces at an event) start from the root of a cubic Hermite interpolant and
+    continue with a Newton step; with the chord alone friction events took 4.4-4.8.
+    """
     model = BladedDisk(blades=8, engine_order=4, friction=law, mistuning_std=0.01, mistuning_seed=0).build()
     r = simulate(model, transient=10, periods=5)
     assert r.counters["events"] > 50
-    assert r.counters["bisections"] / r.counters["events"] <= 5.0
+    assert r.counters["bisections"] / r.counters["events"] <= 4.0
 
 
 @pytest.mark.parametrize("kernel", ["product", "contact"])

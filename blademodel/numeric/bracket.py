@@ -19,18 +19,20 @@ def inverse_quadratic(xa, ga, xb, gb, xc, gc, lo, hi):
     return 0.5 * (lo + hi)
 
 
-def safeguarded_trial(x, lo, hi, width, halve):
+def safeguarded_trial(x, lo, hi, width, halve, reach=0.5):
     """The trial fraction for a predicted root ``x`` in the bracket ``(lo, hi)``.
 
     The bracket's middle if ``halve`` (the last two trials did not halve it) or if
-    ``x`` lies outside; a prediction within half a tolerance ``width`` of an end is
-    set three quarters of a tolerance past that end, so the trial closes the bracket
-    whichever side of the root it falls.
+    ``x`` lies outside; a prediction within half a tolerance ``width`` of ``lo``, or
+    within ``reach`` tolerances of ``hi``, is set three quarters of a tolerance past
+    that end, so the trial closes the bracket whichever side of the root it falls.
+    (A ``reach`` above one half keeps the bracket's far end, the state taken past the
+    event, clear of the root when the first trial was aimed past it.)
     """
     if halve or not lo < x < hi:
         x = 0.5 * (lo + hi)
     if x - lo < 0.5 * width:
         x = lo + 0.75 * width
-    elif hi - x < 0.5 * width:
+    elif hi - x < reach * width:
         x = hi - 0.75 * width
     return x

@@ -29,6 +29,7 @@ _VIEWS = ("vec", "mat", "wvec", "law_offset")
 _TEMPLATE_FUNCTIONS = ("runtime", "vec", "mat", "wvec", "law_offset", "record", "factor_stick", "back_substitute", "solve_stick", "slip_bound", "least_cone_ratio",
                        "contact_forces", "rates", "rhs", "rhs_guards", "rk4_step", "rk_step", "guards_of_forces", "eval_guards",
                        "crossed", "first_crossing", "cone_ratio", "first_near_crossing", "guard_rates",
+                       "stick_force_rates",
                        "locate_trial", "copy_guards", "hermite", "hermite_root", "hermite_extremum",
                        "grazing_candidate", "inverse_quadratic", "safeguarded_trial", "predicted_root",
                        "earliest_crossing", "locate_event", "apply_transition", "project_onto_stick", "resolve_friction",
@@ -44,6 +45,8 @@ _DISPATCH = {
     "law_force": ("mode, N, Nd, v, y, so, R, I, j", "return {call}", "return 0.0"),
     "law_rates": ("mode, N, Nd, v, f, y, so, R, I, j, out, oo", "{call}", ""),
     "law_guards": ("mode, N, Nd, v, f, y, so, R, I, j, G", "{call}", ""),
+    "law_guard_rates": ("mode, N, Nd, Ndd, v, vd, f, fd, y, so, R, I, j, a, D", "{call}", ""),
+    "law_force_rate": ("mode, N, Nd, Ndd, v, vd, y, so, R, I, j, a", "return {call}", "return 0.0"),
     "law_transition": ("mode, gi, N, Nd, v, f, y, so, R, I, j, ztmp", "return {call}", "return mode"),
     "law_energy": ("y, so, R, I, j", "return {call}", "return 0.0"),
     "law_dissipation": ("mode, N, Nd, v, f, y, so, R, I, j", "return {call}", "return 0.0"),
@@ -133,7 +136,8 @@ def generate_contact_kernel(laws: list[FrictionLaw]) -> tuple[str, dict]:
         L.append(inspect.getsource(contact_rigid_stubs))
         L.append("")
     fns = [f"law{K}_{f}" for K in range(len(codes))
-           for f in ("force", "rates", "guards", "transition", "energy", "dissipation")]
+           for f in ("force", "rates", "guards", "guard_rates", "force_rate", "transition", "energy",
+                      "dissipation")]
     for fn in (*fns, *_DISPATCH, *_TEMPLATE_FUNCTIONS):
         inline = ", inline='always'" if fn in _VIEWS else ""
         # Only entry points are called from Python: the others need no CPython or C wrapper.

@@ -137,11 +137,12 @@ def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4") -> tup
     R = pack([tables.invm, Kv, Cv, fs, fc, om, tables.cgn, tables.cgr, tables.cgap, tables.ck, tables.p, tables.W,
               tableau], range(contract.R_INVM, contract.R_RK + 1), np.float64, 0)
     sizes = [n] + [m] * 9 + [contract.MAX_GROUPS, contract.MAX_GROUPS, contract.MAX_LAW_STATES, n_state, m * m,
-                             m, 1]
+                             m, 1, n, m]
     WF = pack([np.zeros(k) for k in sizes],
               [contract.F_F, contract.F_N, contract.F_ND, contract.F_V, contract.F_FR, contract.F_DL, contract.F_X,
                contract.F_D, contract.F_NULL, contract.F_B, contract.F_SG, contract.F_CG, contract.F_Z,
-               contract.F_YEV, contract.F_L, contract.F_DR, contract.F_T], np.float64, 0)
+               contract.F_YEV, contract.F_L, contract.F_DR, contract.F_T, contract.F_FD, contract.F_XD],
+              np.float64, 0)
     WF[header[contract.F_T]] = math.nan   # the time of the forcing's sin and cos in F_SG, F_CG: none yet
     I = np.concatenate([header, ints])
     WI = np.zeros(2 + 7 * m, dtype=np.int64)

@@ -40,7 +40,8 @@ forces), ``Dd`` and ``Lf`` (envelope LDL^T factor of the stick matrix), ``nullv`
 (its null vector), ``bst`` (stick right-hand side), ``sg, cg`` (sin and cos of each
 frequency group), ``ztmp`` (law-state scratch), ``yev`` (state at an event before
 the friction problem), ``cdr`` (penetration rates), ``tsc`` (the time of ``sg, cg``;
-NaN when none).
+NaN when none), ``Fd`` and ``xd`` (rates of the generalized forces and of the stick
+forces, for the stick guards' rates at an event).
 
 ``integrate`` also takes ``SC`` (``(SC_ROWS + s - 1, n_state)``: RK4 stages 0-4, the
 step's or bracket's end 5, the trial 6, the sub-step start 7, ``dy/dt`` at the step's
@@ -66,7 +67,7 @@ import math  # noqa: F401
 
 from blademodel.numeric.contract import (C_BISECTIONS, C_EVENTS, C_FRICTION_PIVOTS, C_GRAZING, C_LOGGED, C_RECORDS, C_RHS,
                                          C_STEPS, F_B, F_CG, F_D, F_DL, F_F, F_FR, F_L, F_N, F_ND, F_NULL, F_SG,
-                                         F_V, F_X, F_YEV, F_Z, F_DR, F_T, H_N, H_NS, R_RK, SC_ROWS, H_NC, H_NF, H_NG, H_NLAW, MAX_LAW_STATES,
+                                         F_V, F_X, F_YEV, F_Z, F_DR, F_T, F_FD, F_XD, H_N, H_NS, R_RK, SC_ROWS, H_NC, H_NF, H_NG, H_NLAW, MAX_LAW_STATES,
                                          O_CI, O_CIDX, O_CLAW, O_CP, O_CSO, O_FG, O_FI, O_KI, O_KP, O_WI, O_WP, R_CV, R_FC,
                                          R_FS, R_GAP, R_GN, R_GR, R_INVM, R_K, R_KV, R_OM, R_W, S_MAX_CONE_RATIO,
                                          STATUS_EVENT_STORM, STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE,
@@ -467,14 +468,100 @@ def first_crossing(cm, I, WI, G0, G1):
     return -1
 
 
-def guard_rates(I, WF, D):
-    """Time derivatives of the guards where known (the penetration's), NaN elsewhere."""
-    nc = I[H_NC]
-    cdr = vec(WF, I, F_DR, nc)
+def guard_rates(y, dy, cm, I, R, WI, WF, D, with_stick):
+    """Time derivatives of the guards at ``y`` (``dy = dy/dt`` there; the forces of its last ``contact_forces``).
+
+    The penetration's rate is known in every mode; a law guard's where the law's
+    generated ``law_guard_rates`` knows it; a guard on a rigid stick force's only
+    ``with_stick`` (:func:`stick_force_rates`, about half an evaluation of the forces)
+    and not in a closed ring of sticking contacts (whose forces are not determined by
+    the motion); NaN elsewhere.
+    """
+    n, nc = I[H_N], I[H_NC]
+    claw, cidx = vec(I, I, O_CLAW, nc), mat(I, I, O_CIDX, nc, 4)
+    cgn, cgr, ck = mat(R, I, R_GN, nc, 4), mat(R, I, R_GR, nc, 4), vec(R, I, R_K, nc)
+    cN, cNd, cv, cf = vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc), vec(WF, I, F_FR, nc)
+    cdr, xd, pos = vec(WF, I, F_DR, nc), vec(WF, I, F_XD, nc), wvec(WI, nc, 6)
+    stick_known = with_stick and WI[0] > 0 and WI[1] < 0
+    if stick_known:
+        stick_force_rates(y, dy, cm, I, R, WI, WF)
     for j in range(nc):
         D[j, 0] = cdr[j]
         for gi in range(1, D.shape[1]):
             D[j, gi] = math.nan
+        if cm[j] == 0:
+            continue
+        add = 0.0
+        vd = 0.0
+        for k in range(4):
+            i = cidx[j, k]
+            if i >= 0:
+                add += cgn[j, k] * dy[n + i]
+                vd += cgr[j, k] * dy[n + i]
+        fd = xd[pos[j]] if stick_known and pos[j] >= 0 else math.nan
+        law_guard_rates(claw[j], cm[j], cN[j], cNd[j], ck[j] * add, cv[j], vd, cf[j], fd, y,  # noqa: F821
+                        law_offset(I, j), R, I, j, dy, D)
+
+
+def stick_force_rates(y, dy, cm, I, R, WI, WF):
+    """Rates ``xd`` of the stick forces at ``y`` (``dy = dy/dt``; the forces of its last ``contact_forces``).
+
+    The time derivative of the stick condition ``W_SS x = G_S M^-1 F``: the same
+    factor solves ``W_SS xd = G_S M^-1 dF/dt``, with ``dF/dt`` of the springs, dampers,
+    forcing, normal forces and explicit friction forces (``law_force_rate``).
+    """
+    n, nc, nf = I[H_N], I[H_NC], I[H_NF]
+    Kp, Ki = vec(I, I, O_KP, n + 1), I[I[O_KI]:]
+    Cp, Ci = vec(I, I, O_CP, n + 1), I[I[O_CI]:]
+    Kv, Cv = R[I[R_KV]:], R[I[R_CV]:]
+    fi, fg = vec(I, I, O_FI, nf), vec(I, I, O_FG, nf)
+    fs, fc, om = vec(R, I, R_FS, nf), vec(R, I, R_FC, nf), vec(R, I, R_OM, I[H_NG])
+    sg, cg = vec(WF, I, F_SG, I[H_NG]), vec(WF, I, F_CG, I[H_NG])
+    cidx, claw = mat(I, I, O_CIDX, nc, 4), vec(I, I, O_CLAW, nc)
+    cgn, cgr, ck, invm = mat(R, I, R_GN, nc, 4), mat(R, I, R_GR, nc, 4), vec(R, I, R_K, nc), vec(R, I, R_INVM, n)
+    cN, cNd, cv = vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc)
+    Fd, xd = vec(WF, I, F_FD, n), vec(WF, I, F_XD, nc)
+    for i in range(n):
+        s = 0.0
+        for e in range(Kp[i], Kp[i + 1]):
+            s -= Kv[e] * y[n + Ki[e]]
+        for e in range(Cp[i], Cp[i + 1]):
+            s -= Cv[e] * dy[n + Ci[e]]
+        Fd[i] = s
+    for e in range(nf):
+        g = fg[e]
+        Fd[fi[e]] += om[g] * (fs[e] * cg[g] - fc[e] * sg[g])
+    for j in range(nc):
+        mode = cm[j]
+        if mode == 0:
+            continue
+        K = claw[j]
+        fdj = 0.0
+        if not IS_STICK[K, mode]:  # noqa: F821
+            add = 0.0
+            vd = 0.0
+            for k in range(4):
+                i = cidx[j, k]
+                if i >= 0:
+                    add += cgn[j, k] * dy[n + i]
+                    vd += cgr[j, k] * dy[n + i]
+            fdj = law_force_rate(K, mode, cN[j], cNd[j], ck[j] * add, cv[j], vd, y,  # noqa: F821
+                                 law_offset(I, j), R, I, j, dy)
+        for k in range(4):
+            i = cidx[j, k]
+            if i >= 0:
+                Fd[i] -= cNd[j] * cgn[j, k] + fdj * cgr[j, k]
+    ns = WI[0]
+    sl, env = wvec(WI, nc, 0), wvec(WI, nc, 1)
+    for a in range(ns):
+        j = sl[a]
+        s = 0.0
+        for k in range(4):
+            i = cidx[j, k]
+            if i >= 0:
+                s += cgr[j, k] * invm[i] * Fd[i]
+        xd[a] = s
+    solve_stick(ns, env, mat(WF, I, F_L, nc, nc), vec(WF, I, F_D, nc), xd, xd)   # in place
 
 
 def locate_trial(t, y, dt, frac, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counters):
@@ -484,10 +571,10 @@ def locate_trial(t, y, dt, frac, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counter
     first crossing since the start.
     """
     spent = rk_step(t, y, frac * dt, cm, I, R, WI, WF, SC, ymid, True)
-    eval_guards(t + frac * dt, ymid, cm, I, R, WI, WF, Gm)
-    guard_rates(I, WF, Dm)
+    rhs_guards(t + frac * dt, ymid, cm, I, R, WI, WF, SC[4], Gm)   # SC[4]: the stages' scratch, free now
+    guard_rates(ymid, SC[4], cm, I, R, WI, WF, Dm, True)
     counters[C_BISECTIONS] += 1
-    counters[C_RHS] += spent
+    counters[C_RHS] += spent + 1
     return first_crossing(cm, I, WI, G0, Gm)
 
 
@@ -650,7 +737,13 @@ def locate_event(t, y, dt, cm, I, R, WI, WF, SC, GS, width, predicted, counters)
                 halve = hi - lo > 0.5 * w_old
                 w_old = hi - lo
         if predicted:
-            x = safeguarded_trial(x, lo, hi, width, halve)  # noqa: F821
+            if k == k_pred:
+                # the first trial on a target is aimed half a tolerance past its predicted root, and
+                # the next one closes the bracket from the far end: that end, the state taken past
+                # the event, then clears the root by about what a bisection leaves, not by a rounding
+                # error of the guard (an event then fired again at once, at a fine tolerance)
+                x += 0.5 * width
+            x = safeguarded_trial(x, lo, hi, width, halve, 0.75)  # noqa: F821
             halve = False
         elif not lo < x < hi:
             x = 0.5 * (lo + hi)
@@ -963,14 +1056,20 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                 dt = t_end - t
                 if not g0_valid:
                     rhs_guards(t, y, cm, I, R, WI, WF, SC[0], G0)
-                    guard_rates(I, WF, D0)
+                    guard_rates(y, SC[0], cm, I, R, WI, WF, D0, True)
                     counters[C_RHS] += 1
                 # SC[0] holds dy/dt at (t, y): from the line above or the end of the last step
                 spent = rk_step(t, y, dt, cm, I, R, WI, WF, SC, y1, True)
                 rhs_guards(t_end, y1, cm, I, R, WI, WF, knext, G1)
-                guard_rates(I, WF, D1)
+                guard_rates(y1, knext, cm, I, R, WI, WF, D1, False)
                 counters[C_RHS] += spent + 1
                 code = first_crossing(cm, I, WI, G0, G1)
+                if code >= 0 and WI[0] > 0 and WI[1] < 0:
+                    # the stick guards' rates at both ends (kept without them on a step with no event)
+                    guard_rates(y1, knext, cm, I, R, WI, WF, D1, True)
+                    contact_forces(t, y, cm, I, R, WI, WF)
+                    guard_rates(y, SC[0], cm, I, R, WI, WF, D0, True)
+                    counters[C_RHS] += 1
                 sub = dt   # the sub-step whose end lies past the event
                 if code < 0 and detect_grazing:
                     xg = grazing_candidate(cm, I, G0, G1, D0, D1, dt, tol_t / dt)

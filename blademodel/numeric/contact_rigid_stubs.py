@@ -51,3 +51,8 @@ def rigid_problem(cm, I, WI):
 def resolve_friction(t, y, cm, I, R, WI, WF, counters, max_pivots):
     """Never called (``rigid_problem`` is False); resolved."""
     return True
+
+
+def stick_force_rates(y, dy, cm, I, R, WI, WF):
+    """Never called (no stick set)."""
+    return

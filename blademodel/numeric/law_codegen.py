@@ -19,6 +19,15 @@ open and ``open`` when closed, the law's guards follow from 1):
     Rates of the law's states into ``out[oo + i]``.
 ``lawK_guards(mode, N, Nd, v, f, y, so, R, I, j, G)``
     Law guard values into ``G[j, 1 + i]``.
+``lawK_guard_rates(mode, N, Nd, Ndd, v, vd, f, fd, y, so, R, I, j, a, D)``
+    Time derivatives of the law guards into ``D[j, 1 + i]`` (``Ndd``, ``vd``, ``fd``:
+    the rates of ``Nd``, ``v`` and of a rigid stick force; ``a``: ``dy/dt``, whose
+    law-state rates sit at ``a[so + i]``). Not written (NaN) where a guard is not
+    smooth (``Abs``, ``Min``, ...); NaN through ``fd`` where the stick force's rate is
+    not known.
+``lawK_force_rate(mode, N, Nd, Ndd, v, vd, y, so, R, I, j, a)``
+    Rate of an explicit-force mode's friction force (0 open or in rigid stick; NaN
+    if not smooth).
 ``lawK_transition(mode, gi, N, Nd, v, f, y, so, R, I, j, ztmp)``
     Apply guard ``gi``'s first admissible candidate (reset into ``y``) and return the
     target mode. A candidate whose target is a rigid stick mode is taken at once,
@@ -116,6 +125,60 @@ def _check_rigid(law: FrictionLaw, ctx: ContactContext, name: str):
                          f"got {fp} and {fm}")
 
 
+#: Functions whose derivative is not a smooth expression: a guard using one gets no rate.
+_NONSMOOTH = (sp.Abs, sp.Min, sp.Max, sp.Piecewise, sp.sign, sp.Heaviside)
+
+
+def rate_expr(g, ctx: ContactContext, force, Ndd, vd, fd, zd):
+    """``dg/dt`` of an expression of a contact's ``N, Nd, v, f`` and law states, or None if not smooth.
+
+    ``force`` is the mode's explicit friction force, substituted for ``f``; None in a
+    rigid stick mode, whose force is the stick solution with rate ``fd``. ``Ndd``,
+    ``vd`` and ``zd`` (per law state) are the rates of ``Nd``, ``v`` and the states.
+    """
+    g = sp.sympify(g)
+    if force is not None:
+        g = g.xreplace({ctx.f: force})
+    if any(g.has(fn) for fn in _NONSMOOTH):
+        return None
+    chain = [(ctx.N, ctx.Ndot), (ctx.Ndot, Ndd), (ctx.v, vd), (ctx.f, fd)] + list(zip(ctx.states.values(), zd))
+    return sp.Add(*[sp.diff(g, s) * rate for s, rate in chain])
+
+
+def _rates_source(K, ctx, modes, guard_lists, stick, explicit):
+    """Source lines of ``lawK_guard_rates`` and ``lawK_force_rate``."""
+    Ndd, vd, fd = (sp.Symbol(n, real=True) for n in ("Ndd", "vd", "fd"))
+    zd = [sp.Symbol(f"_zd{i}", real=True) for i in range(len(ctx.states))]
+    names = _names(ctx)
+    names.update({Ndd: "Ndd", vd: "vd", fd: "fd"})
+    names.update({s: f"a[so + {i}]" for i, s in enumerate(zd)})
+    pr = _Printer(names)
+    L = [f"def law{K}_guard_rates(mode, N, Nd, Ndd, v, vd, f, fd, y, so, R, I, j, a, D):"]
+    body = []
+    for m in range(1, len(modes)):
+        force = None if stick[m] else explicit[m]
+        rates = [rate_expr(g.expr, ctx, force, Ndd, vd, fd, zd) for g in guard_lists[m]]
+        known = [(i, r) for i, r in enumerate(rates) if r is not None]
+        if known:
+            body.append(f"    {'if' if not body else 'elif'} mode == {m}:")
+            body += _assign([r for _, r in known], [f"D[j, {1 + i}]" for i, _ in known], pr, " " * 8, "x")
+    L += body or ["    pass"]
+    L.append("")
+    L.append(f"def law{K}_force_rate(mode, N, Nd, Ndd, v, vd, y, so, R, I, j, a):")
+    for m in range(1, len(modes)):
+        if not stick[m] and explicit[m] != 0:
+            r = rate_expr(explicit[m], ctx, explicit[m], Ndd, vd, fd, zd)
+            L.append(f"    if mode == {m}:")
+            if r is None:
+                L.append("        return math.nan")
+            else:
+                L += _assign([r], ["fdm"], pr, " " * 8, "x")
+                L.append("        return fdm")
+    L.append("    return 0.0")
+    L.append("")
+    return L
+
+
 def law_code(law: FrictionLaw, K: int) -> LawCode:
     """Generate the functions of law kind ``K`` from ``law``'s symbolic expressions.
 
@@ -188,6 +251,7 @@ def law_code(law: FrictionLaw, K: int) -> LawCode:
             body += _assign([g.expr for g in gl], [f"G[j, {1 + i}]" for i in range(len(gl))], pr, " " * 8, "x")
     L += body or ["    pass"]
     L.append("")
+    L += _rates_source(K, ctx, modes, guard_lists, stick, explicit)
 
     # transitions
     L.append(f"def law{K}_transition(mode, gi, N, Nd, v, f, y, so, R, I, j, ztmp):")
