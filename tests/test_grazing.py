@@ -86,3 +86,29 @@ def test_the_pairs_brief_contacts_are_the_ones_a_finer_step_resolves():
     assert coarse_product.counters["events"] < fine_product.counters["events"]
     assert coarse_contact.counters["events"] == fine_product.counters["events"] == fine_contact.counters["events"]
     assert coarse_contact.events["to"] == fine_product.events["to"]
+
+
+def test_a_slip_phase_shorter_than_a_step_is_detected():
+    """Grazing of the law guards (rates from the law's SymPy derivatives): bilinear pair, gamma = 8, F0 = 80.
+
+    With RK8 at S = 250 some stick phases are interrupted by a slip shorter than a step (the stick
+    guard ``mu N - kd z`` dips below zero and back). With grazing detection the coarse run sees every
+    event of a fine RK4 run (S = 8000, which resolves them with its ordinary check), in the same order,
+    and ends on its state; without, it misses stick->slip transitions and drifts away.
+    """
+    from collections import Counter
+
+    from blademodel.config import BladePair
+    m = BladePair(friction="bilinear", gamma=8.0, F0=80.0).build()
+    run = dict(transient=0, periods=20, kernel="contact")
+    fine = simulate(m, steps_per_period=8000, detect_grazing=False, **run)
+    on = simulate(m, steps_per_period=250, method="rk8", **run)
+    off = simulate(m, steps_per_period=250, method="rk8", detect_grazing=False, **run)
+    assert on.counters["grazing_events"] > 0 and on.events["guard"] == fine.events["guard"]
+    assert np.max(np.abs(np.array(on.events["t"]) - fine.events["t"])) < 1e-5 * on.period / 250
+    missed = Counter(fine.events["guard"]) - Counter(off.events["guard"])
+    assert any("stick->slip" in g for g in missed), missed
+    scale = np.max(np.abs(fine.y), axis=0)
+    err_on = np.max(np.abs(on.final_state - fine.final_state) / scale)
+    err_off = np.max(np.abs(off.final_state - fine.final_state) / scale)
+    assert err_on < 1e-8 and err_off > 100 * err_on
