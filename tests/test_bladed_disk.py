@@ -227,13 +227,23 @@ def test_simulate_command_on_a_disk(tmp_path):
 
 @pytest.mark.parametrize("law", ["coulomb", "bilinear"])
 def test_fourth_order_through_hundreds_of_events_on_a_mistuned_ring(law):
-    """RK4 keeps its order through located events (contact, stick/slip and friction-problem ones)."""
+    """RK4 keeps its order through located events (contact, stick/slip and friction-problem ones).
+
+    The observed order approaches 4 from below as the step shrinks (3.78-3.89 between S = 500 and
+    1000, >= 3.95 between 2000 and 4000): the error is ``A h^4 + B h^5`` with a sizeable second term
+    at coarse steps, and that two-term model fitted to the three finer steps predicts the coarsest
+    step's error.
+    """
     cfg = _disk(blades=6, engine_order=2, friction=law, mistuning=[0.0, 0.02, -0.01, 0.03, 0.0, -0.02])
     model = cfg.build()
+    ladder = (500, 1000, 2000, 4000)
     runs = {S: simulate(model, periods=6, steps_per_period=S, event_tol=1e-13, record_every=S)
-            for S in (500, 1000, 2000, 16000)}
+            for S in (*ladder, 32000)}
     assert len({r.counters["events"] for r in runs.values()}) == 1 and runs[500].counters["events"] > 300
-    ref = runs[16000].final_state
-    err = [np.max(np.abs(runs[S].final_state - ref)) / np.max(np.abs(ref)) for S in (500, 1000, 2000)]
-    orders = np.log2(np.array(err[:-1]) / np.array(err[1:]))
-    assert (orders > 3.7).all(), orders
+    ref = runs[32000].final_state
+    err = np.array([np.max(np.abs(runs[S].final_state - ref)) / np.max(np.abs(ref)) for S in ladder])
+    orders = np.log2(err[:-1] / err[1:])
+    assert (orders > 3.7).all() and (np.diff(orders) > 0).all() and orders[-1] >= 3.9, orders
+    h = 1.0 / np.array(ladder)
+    (A, B), *_ = np.linalg.lstsq(np.vstack([h[1:] ** 4, h[1:] ** 5]).T, err[1:], rcond=None)
+    assert abs(A * h[0] ** 4 + B * h[0] ** 5 - err[0]) < 0.05 * err[0]
