@@ -116,7 +116,7 @@ class CKernel:
 
     def run(self, cfg, model, y0, mode0: int, period: float, steps: int, start: int, end: int,
             event_tol: float = 1e-10, max_events: int = 100):
-        """Integrate periods ``[start, end)``; returns ``(status, y, mode, counters[steps, events, bisections, rhs])``."""
+        """Integrate periods ``[start, end)``; returns ``(status, y, mode, counters[steps, events, location_substeps, rhs])``."""
         law = {"coulomb": 0, "bilinear": 1}[cfg.friction]
         prm = np.array([model.parameters.get(n, 1.0) for n in C_PARAMS], dtype=float)
         y = np.array(y0, dtype=float)

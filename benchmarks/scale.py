@@ -195,7 +195,7 @@ def warm_part(ns, laws, repeats: int) -> tuple[list[dict], dict]:
     """Per-step thread CPU time with the cache warm, all cases interleaved."""
     from blademodel.config import BladedDisk, BladePair
     from blademodel.numeric import make_integrator
-    from blademodel.numeric.contract import C_BISECTIONS, C_EVENTS, C_STEPS, N_COUNTERS
+    from blademodel.numeric.contract import C_LOCATION_SUBSTEPS, C_EVENTS, C_STEPS, N_COUNTERS
 
     cases = {}
     for law in laws:
@@ -247,7 +247,7 @@ def warm_part(ns, laws, repeats: int) -> tuple[list[dict], dict]:
                          us_step=tmin / steps * 1e6, us_step_contact=tmin / steps / n * 1e6,
                          spread=float(np.median(ts) / tmin), events_step=c[C_EVENTS] / steps,
                          events_step_contact=c[C_EVENTS] / steps / n,
-                         bis_event=c[C_BISECTIONS] / c[C_EVENTS] if c[C_EVENTS] else None,
+                         bis_event=c[C_LOCATION_SUBSTEPS] / c[C_EVENTS] if c[C_EVENTS] else None,
                          steps=steps, counters=c, times_s=ts))
     return rows, {"loads_before_each_repeat": loads}
 

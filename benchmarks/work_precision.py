@@ -73,7 +73,7 @@ def main():
                 if prev is not None and err > 0 and prev > 0:
                     order = -math.log(err / prev) / math.log(2.0)
                 rows.append(dict(law=law, event_tol=tol, S=S, error=err, order=order, status=int(stt),
-                                 rhs=int(c[3]), events=int(c[1]), bisections=int(c[2]),
+                                 rhs=int(c[3]), events=int(c[1]), location_substeps=int(c[2]),
                                  cost=min(times[(S, tol)]) / t_def, time_s=min(times[(S, tol)])))
                 prev = err
         results += rows

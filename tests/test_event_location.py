@@ -38,8 +38,8 @@ def test_pair_events_are_the_bisection_roots(law):
         assert a.events["to"] == b.events["to"] == c.events["to"] and len(a.events["t"]) == 1
         assert abs(a.events["t"][0] - b.events["t"][0]) <= 1.01 * tol * h
         assert abs(a.events["t"][0] - c.events["t"][0]) <= 1.01 * tol * h
-        per_event.append((b.counters["bisections"] / b.counters["events"],
-                          c.counters["bisections"] / c.counters["events"]))
+        per_event.append((b.counters["location_substeps"] / b.counters["events"],
+                          c.counters["location_substeps"] / c.counters["events"]))
     assert np.mean(per_event, axis=0)[0] <= 5 and np.mean(per_event, axis=0)[1] <= 7
 
 
@@ -54,7 +54,7 @@ def test_a_mistuned_ring_locates_each_event_in_a_few_sub_steps(law):
     model = BladedDisk(blades=8, engine_order=4, friction=law, mistuning_std=0.01, mistuning_seed=0).build()
     r = simulate(model, transient=10, periods=5)
     assert r.counters["events"] > 50
-    assert r.counters["bisections"] / r.counters["events"] <= 4.0
+    assert r.counters["location_substeps"] / r.counters["events"] <= 4.0
 
 
 @pytest.mark.parametrize("kernel", ["product", "contact"])
@@ -70,7 +70,7 @@ def test_a_tolerance_below_rounding_ends_at_the_resolution(kernel):
             assert time.process_time() - t0 < 5.0
         assert r.counters["events"] == ref.counters["events"] > 0
         cap = 60 if kernel == "product" else MAX_LOCATE_TRIALS
-        assert r.counters["bisections"] <= cap * r.counters["events"]
+        assert r.counters["location_substeps"] <= cap * r.counters["events"]
         amp = np.max(np.abs(ref.y), axis=0)
         assert np.max(np.abs(r.final_state - ref.final_state) / amp) < 1e-9
         assert f"about {EVENT_TOL_FLOOR:g} of it" in str(warned[0].message)   # the floor it names
@@ -93,9 +93,19 @@ def test_predicted_location_on_the_pair_keeps_its_periodic_orbit(law):
     amp = np.max(np.abs(a.y), axis=0)
     assert np.max(np.abs(a.final_state - b.final_state) / amp) < 1e-10
     assert a.counters["events"] == b.counters["events"] and a.events["to"] == b.events["to"]
-    assert b.counters["bisections"] < a.counters["bisections"] / 5
+    assert b.counters["location_substeps"] < a.counters["location_substeps"] / 5
 
 
 def test_an_unknown_event_location_is_refused():
     with pytest.raises(ValueError, match="event_location = 'secant'"):
         simulate(BladePair().build(), periods=1, event_location="secant")
+
+
+def test_the_location_counter_keeps_its_former_name_with_a_warning():
+    """``counters["location_substeps"]`` (sub-steps spent locating events; ``bisections`` before)."""
+    r = simulate(BladePair().build(), transient=1, periods=1)
+    assert "bisections" not in r.counters and r.counters["location_substeps"] > 0
+    with pytest.warns(DeprecationWarning, match="location_substeps"):
+        assert r.counters["bisections"] == r.counters["location_substeps"]
+    with pytest.raises(KeyError):
+        r.counters["no_such_counter"]

@@ -65,7 +65,7 @@ while *some* admissible distribution exists.
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import (C_BISECTIONS, C_EVENTS, C_FRICTION_PIVOTS, C_GRAZING, C_LOGGED, C_RECORDS, C_RHS,
+from blademodel.numeric.contract import (C_LOCATION_SUBSTEPS, C_EVENTS, C_FRICTION_PIVOTS, C_GRAZING, C_LOGGED, C_RECORDS, C_RHS,
                                          C_STEPS, F_B, F_CG, F_D, F_DL, F_F, F_FR, F_L, F_N, F_ND, F_NULL, F_SG,
                                          F_V, F_X, F_YEV, F_Z, F_DR, F_T, F_FD, F_XD, H_N, H_NS, R_RK, SC_ROWS, H_NC, H_NF, H_NG, H_NLAW, MAX_LAW_STATES,
                                          O_CI, O_CIDX, O_CLAW, O_CP, O_CSO, O_FG, O_FI, O_KI, O_KP, O_WI, O_WP, R_CV, R_FC,
@@ -573,7 +573,7 @@ def locate_trial(t, y, dt, frac, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counter
     spent = rk_step(t, y, frac * dt, cm, I, R, WI, WF, SC, ymid, True)
     rhs_guards(t + frac * dt, ymid, cm, I, R, WI, WF, SC[4], Gm)   # SC[4]: the stages' scratch, free now
     guard_rates(ymid, SC[4], cm, I, R, WI, WF, Dm, True)
-    counters[C_BISECTIONS] += 1
+    counters[C_LOCATION_SUBSTEPS] += 1
     counters[C_RHS] += spent + 1
     return first_crossing(cm, I, WI, G0, Gm)
 

@@ -22,7 +22,7 @@ STATUS_NAMES = {STATUS_OK: "done", STATUS_NONFINITE: "non-finite state", STATUS_
 # Integer counters: one int64 array of N_COUNTERS, accumulated across calls of ``integrate``.
 C_STEPS = 0           #: completed RK4 steps
 C_EVENTS = 1          #: events handled (guard transitions and friction-problem mode changes)
-C_BISECTIONS = 2      #: sub-steps spent locating events
+C_LOCATION_SUBSTEPS = 2      #: sub-steps spent locating events
 C_RHS = 3             #: right-hand-side evaluations
 C_LOGGED = 4          #: events offered to the log (may exceed its length)
 C_RECORDS = 5         #: records written (the next record's row)
@@ -31,7 +31,7 @@ C_GRAZING = 7         #: crossings found inside a step whose ends showed none (p
 N_COUNTERS = 8
 
 #: Names of the integer counters, in index order (``SimulationResult.counters``).
-COUNTER_NAMES = ("steps", "events", "bisections", "rhs_evaluations", "events_logged", "records",
+COUNTER_NAMES = ("steps", "events", "location_substeps", "rhs_evaluations", "events_logged", "records",
                  "friction_pivots", "grazing_events")
 
 # Float statistics: one float64 array of N_STATS, accumulated across calls.

@@ -306,7 +306,7 @@ class HybridIntegrator(Integrator):
         log : tuple of arrays, optional
             ``(t, guard, from, to)`` arrays for the event log.
         counters : ndarray of int64, optional
-            Accumulates steps, events, bisections, rhs evaluations, log and record
+            Accumulates steps, events, location sub-steps, rhs evaluations, log and record
             positions; pass the same array to consecutive calls.
 
         Returns

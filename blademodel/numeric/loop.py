@@ -18,7 +18,7 @@ STATUS_OK = 0
 STATUS_NONFINITE = 1
 STATUS_EVENT_STORM = 2
 
-C_STEPS, C_EVENTS, C_BISECTIONS, C_RHS, C_LOGGED, C_RECORDS = 0, 1, 2, 3, 4, 5
+C_STEPS, C_EVENTS, C_LOCATION_SUBSTEPS, C_RHS, C_LOGGED, C_RECORDS = 0, 1, 2, 3, 4, 5
 #: Cap on the trial sub-steps of one event's location.
 MAX_LOCATE_TRIALS = 160
 
@@ -159,7 +159,7 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
         else:
             counters[C_RHS] += rk_step(mode, t, y, x * dt, p, k1, k2, k3, k4, tmp, ymid, tab, K)
         guards(mode, t + x * dt, ymid, p, gm)  # noqa: F821
-        counters[C_BISECTIONS] += 1
+        counters[C_LOCATION_SUBSTEPS] += 1
         c = first_crossing(mode, g0, gm)
         if c >= 0:
             hi = x

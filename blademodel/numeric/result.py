@@ -15,6 +15,21 @@ class SimulationError(RuntimeError):
         self.result = result
 
 
+class Counters(dict):
+    """The run's counters by name; a renamed counter still answers to its former name, with a warning."""
+
+    #: Former names of counters.
+    RENAMED = {"bisections": "location_substeps"}
+
+    def __missing__(self, key):
+        new = self.RENAMED.get(key)
+        if new is None or new not in self:
+            raise KeyError(key)
+        import warnings
+        warnings.warn(f"counter {key!r} is now called {new!r}", DeprecationWarning, stacklevel=2)
+        return self[new]
+
+
 @dataclass
 class SimulationResult:
     """Time history, Poincare samples, event log and counters of one run.
@@ -34,7 +49,8 @@ class SimulationResult:
         in the recorded window (at most ``max_log``; ``counters["events_logged"]``
         counts all).
     counters : dict of str to int
-        ``steps``, ``events``, ``bisections``, ``rhs_evaluations``, ...
+        ``steps``, ``events``, ``location_substeps`` (the sub-steps spent locating events;
+        ``bisections``, its former name, still reads it, with a warning), ``rhs_evaluations``, ...
     params : dict of str to float
         Every parameter value used.
     period : float

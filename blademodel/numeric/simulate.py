@@ -13,7 +13,7 @@ from .contract import (C_LOGGED, C_RECORDS, COUNTER_NAMES, N_COUNTERS, N_STATS, 
 from .integrator import HybridIntegrator, excitation_period  # noqa: F401  (re-exported)
 from .kernels import make_integrator
 from .limits import check_run_length
-from .result import SimulationError, SimulationResult
+from .result import Counters, SimulationError, SimulationResult
 
 
 def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_period: int = 1000,
@@ -151,7 +151,7 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
                STATUS_EVENT_STORM: f"event storm: more than {max_events_per_step} events in one step {where}",
                STATUS_FRICTION_UNRESOLVED: f"the friction problem of an event was not resolved {where}"
                }[int(status)]
-    counter_dict = dict(zip(COUNTER_NAMES, map(int, counters)))
+    counter_dict = Counters(zip(COUNTER_NAMES, map(int, counters)))
     if per_contact:
         counter_dict.update(dict(zip(STAT_NAMES, map(float, stats))))
         if stats[S_MAX_CONE_RATIO] > 1 + 1e-9:
