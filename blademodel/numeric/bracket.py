@@ -36,3 +36,37 @@ def safeguarded_trial(x, lo, hi, width, halve, reach=0.5):
     elif hi - x < reach * width:
         x = hi - 0.75 * width
     return x
+
+
+def hermite(s, g0, g1, d0, d1):
+    """The cubic Hermite interpolant on ``[0, 1]`` of values ``g0, g1`` and slopes ``d0, d1``; value and slope."""
+    s2 = s * s
+    s3 = s2 * s
+    v = (2.0 * s3 - 3.0 * s2 + 1.0) * g0 + (s3 - 2.0 * s2 + s) * d0 + (3.0 * s2 - 2.0 * s3) * g1 + (s3 - s2) * d1
+    d = (6.0 * s2 - 6.0 * s) * (g0 - g1) + (3.0 * s2 - 4.0 * s + 1.0) * d0 + (3.0 * s2 - 2.0 * s) * d1
+    return v, d
+
+
+def hermite_root(g0, g1, d0, d1, s):
+    """A root in ``(0, 1)`` of the Hermite interpolant by Newton from ``s``; ``s`` itself if it fails."""
+    x = s
+    for _ in range(8):
+        v, d = hermite(x, g0, g1, d0, d1)
+        if d == 0.0 or not math.isfinite(d):
+            return s
+        dx = v / d
+        x -= dx
+        if not 0.0 < x < 1.0:
+            return s
+        if abs(dx) <= 1e-15:
+            break
+    return x
+
+
+def predicted_root(g0, g1, d0, d1, lo, hi, dt):
+    """Predicted root in ``(lo, hi)`` of a guard with values ``g0, g1`` and rates ``d0, d1`` at the ends."""
+    x = g0 / (g0 - g1) if g0 != g1 else 0.5
+    if math.isfinite(d0) and math.isfinite(d1):
+        span = (hi - lo) * dt
+        x = hermite_root(g0, g1, d0 * span, d1 * span, x)
+    return lo + x * (hi - lo)

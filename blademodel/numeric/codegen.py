@@ -213,6 +213,20 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
         L += _block(g, [f"out[{i}]" for i in range(len(g))], pr_y, 8, "x") if g else ["        pass"]
     L.append("")
 
+    # Rates of the guards that the state alone gives: a guard of the coordinates (and time) only,
+    # the penetration, has the rate sum dg/dq u + dg/dt; one of velocities or law states would need
+    # the accelerations (a right-hand side) and is left NaN.
+    later = set(state[len(system.q):])
+    L.append("def guard_rates(mode, t, y, p, out):")
+    for m, g in enumerate(guards):
+        L.append(f"    {'if' if m == 0 else 'elif'} mode == {m}:")
+        L += [f"        out[{i}] = math.nan" for i in range(len(g))] or ["        pass"]
+        known = [(i, sum((sp.diff(e, q) * u for q, u in zip(system.q, system.u)), sp.diff(e, t)))
+                 for i, e in enumerate(g) if not (e.free_symbols & later)]
+        if known:
+            L += _block([r for _, r in known], [f"out[{i}]" for i, _ in known], pr_y, 8, "d")
+    L.append("")
+
     L.append("def transition(mode, gi, t, y, p, ytmp):")
     L.append("    n = y.shape[0]")
     first = True
@@ -265,8 +279,9 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
     full_state = list(state) + [sp.Symbol(f"_energy_{i}") for i in range(n_state - len(state))]
     L += fused_rk4_source(flow_cses, full_state, t, {**pnames, **const_names})
     L.append("")
-    for fn in ("rhs", "guards", "transition", "rk4_step", "stage_sum", "rk_step", "crossed", "first_crossing",
-               "inverse_quadratic", "safeguarded_trial", "earliest_chord",
+    for fn in ("rhs", "guards", "guard_rates", "transition", "rk4_step", "stage_sum", "rk_step", "crossed",
+               "first_crossing", "inverse_quadratic", "safeguarded_trial", "hermite", "hermite_root",
+               "predicted_root", "earliest_predicted", "copy_guards",
                "locate_event", "simultaneous_crossing", "initial_mode",
                "integrate"):
         L.append(f"{fn} = njit(cache=True)({fn})")

@@ -586,38 +586,13 @@ def copy_guards(G, Gm, D, Dm):
             D[j, gi] = Dm[j, gi]
 
 
-def hermite(s, g0, g1, d0, d1):
-    """The cubic Hermite interpolant on ``[0, 1]`` of values ``g0, g1`` and slopes ``d0, d1``; value and slope."""
-    s2 = s * s
-    s3 = s2 * s
-    v = (2.0 * s3 - 3.0 * s2 + 1.0) * g0 + (s3 - 2.0 * s2 + s) * d0 + (3.0 * s2 - 2.0 * s3) * g1 + (s3 - s2) * d1
-    d = (6.0 * s2 - 6.0 * s) * (g0 - g1) + (3.0 * s2 - 4.0 * s + 1.0) * d0 + (3.0 * s2 - 2.0 * s) * d1
-    return v, d
-
-
-def hermite_root(g0, g1, d0, d1, s):
-    """A root in ``(0, 1)`` of the Hermite interpolant by Newton from ``s``; ``s`` itself if it fails."""
-    x = s
-    for _ in range(8):
-        v, d = hermite(x, g0, g1, d0, d1)
-        if d == 0.0 or not math.isfinite(d):
-            return s
-        dx = v / d
-        x -= dx
-        if not 0.0 < x < 1.0:
-            return s
-        if abs(dx) <= 1e-15:
-            break
-    return x
-
-
 def hermite_extremum(g0, g1, d0, d1):
     """Where the Hermite interpolant's slope, ``d0`` and ``d1`` of opposite signs at the ends, is zero."""
     lo = 0.0
     hi = 1.0
     for _ in range(60):
         mid = 0.5 * (lo + hi)
-        d = hermite(mid, g0, g1, d0, d1)[1]
+        d = hermite(mid, g0, g1, d0, d1)[1]  # noqa: F821
         if (d > 0.0) == (d0 > 0.0):
             lo = mid
         else:
@@ -654,19 +629,10 @@ def grazing_candidate(cm, I, G0, G1, D0, D1, dt, width):
             falling = dr <= 0 and g0 > 0.0 and g1 > 0.0 and d0 < 0.0 and d1 > 0.0
             if rising or falling:
                 s = hermite_extremum(g0, g1, d0, d1)
-                v = hermite(s, g0, g1, d0, d1)[0]
+                v = hermite(s, g0, g1, d0, d1)[0]  # noqa: F821
                 if s > width and ((rising and v > 0.0) or (falling and v < 0.0)) and (best < 0.0 or s < best):
                     best = s
     return best
-
-
-def predicted_root(g0, g1, d0, d1, lo, hi, dt):
-    """Predicted root in ``(lo, hi)`` of a guard with values ``g0, g1`` and rates ``d0, d1`` at the ends."""
-    x = g0 / (g0 - g1) if g0 != g1 else 0.5
-    if math.isfinite(d0) and math.isfinite(d1):
-        span = (hi - lo) * dt
-        x = hermite_root(g0, g1, d0 * span, d1 * span, x)
-    return lo + x * (hi - lo)
 
 
 def earliest_crossing(cm, I, WI, Glo, G1, Dlo, D1, lo, hi, dt):
@@ -680,7 +646,7 @@ def earliest_crossing(cm, I, WI, Glo, G1, Dlo, D1, lo, hi, dt):
         m = cm[j]
         for gi in range(NG[K, m]):  # noqa: F821
             if crossed(Glo[j, gi], G1[j, gi], GDIR[K, m, gi]):  # noqa: F821
-                x = predicted_root(Glo[j, gi], G1[j, gi], Dlo[j, gi], D1[j, gi], lo, hi, dt)
+                x = predicted_root(Glo[j, gi], G1[j, gi], Dlo[j, gi], D1[j, gi], lo, hi, dt)  # noqa: F821
                 if best < 0 or x < xbest:
                     best = j * GMAX + gi  # noqa: F821
                     xbest = x

@@ -95,47 +95,69 @@ def first_crossing(mode, g0, g1):
     return -1
 
 
-def earliest_chord(mode, glo, g1, lo, hi):
-    """The crossed guard of ``mode`` whose chord between ``lo`` and ``hi`` crosses zero first, and that point."""
+def earliest_predicted(mode, glo, g1, dlo, d1, lo, hi, dt):
+    """The crossed guard of ``mode`` whose root in ``(lo, hi)`` is predicted first, and that root.
+
+    The root of the cubic Hermite interpolant where the guard's rates ``dlo, d1`` are
+    known, else of the chord (:func:`predicted_root`).
+    """
     best = -1
     xbest = hi
     for i in range(N_GUARDS[mode]):  # noqa: F821
         if crossed(glo[i], g1[i], GUARD_DIR[mode, i]):  # noqa: F821
-            x = lo + (hi - lo) * (glo[i] / (glo[i] - g1[i]) if glo[i] != g1[i] else 0.5)
+            x = predicted_root(glo[i], g1[i], dlo[i], d1[i], lo, hi, dt)  # noqa: F821
             if best < 0 or x < xbest:
                 best = i
                 xbest = x
     return best, xbest
 
 
+def copy_guards(g, d, gm, dm):
+    """``g, d = gm, dm`` (guards and their rates)."""
+    for i in range(g.shape[0]):
+        g[i] = gm[i]
+        d[i] = dm[i]
+
+
 def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp, y1, ymid, g0, g1, gm, glo,
-                 tab, K, counters):
+                 d0, d1, dm, dlo, tab, K, counters):
     """Bracket the earliest crossing of the sub-step ``[t, t + dt]`` below ``event_tol * h``.
 
     ``y1`` and ``g1`` hold the state and guards at the sub-step's end on entry, and
     at the bracket's far end ``hi`` (returned, a fraction of ``dt``) on exit. Every
     trial is the true RK4 sub-step from ``(t, y)``; the bracket is kept by
     ``first_crossing`` over every guard. Without ``predicted``, bisection (34 trials
-    at ``1e-10``). With it, the trials follow the crossed guard whose chord crosses
-    first: the chord's root, then secants through the last two trials of that guard,
-    inside the bracket, a bisection when two trials did not halve it, and a trial
-    predicted within half a tolerance of an end set three quarters of a tolerance past
-    it, so the last trial closes the bracket (about 5 trials). Either way the location
-    ends when the bracket cannot be split any further in floating point.
+    at ``1e-10``). With it, the trials follow the crossed guard whose root is
+    predicted first: the root of the cubic Hermite interpolant of its values and
+    rates where the state gives its rates (the penetration: ``guard_rates``), else of
+    the chord, aimed half a tolerance past it; then a Newton step on the guard's rate
+    at the trial, or inverse quadratic interpolation through the last three trials of
+    that guard and secants, inside the bracket, a bisection when two trials did not
+    halve it, and a trial predicted within half a tolerance of the start or three
+    quarters of one of the end set three quarters of a tolerance inside, so the last
+    trial closes the bracket. Either way the location ends when the bracket cannot be
+    split any further in floating point. ``d0, d1, dm, dlo`` are the rates' work arrays.
     """
     n = y.shape[0]
     ng = g0.shape[0]
     tol_t = event_tol * h
     width = tol_t / dt
-    for i in range(ng):
-        glo[i] = g0[i]
+    if predicted:
+        guard_rates(mode, t, y, p, d0)  # noqa: F821
+        guard_rates(mode, t + dt, y1, p, d1)  # noqa: F821
+    else:
+        for i in range(ng):
+            d0[i] = math.nan
+            d1[i] = math.nan
+    copy_guards(glo, dlo, g0, d0)
     lo = 0.0
     hi = 1.0
-    gi, x = earliest_chord(mode, glo, g1, lo, hi)
+    gi, x = earliest_predicted(mode, glo, g1, dlo, d1, lo, hi, dt)
     if gi < 0:
         gi = first_crossing(mode, g0, g1)
     xa, ga, xb, gb = lo, glo[gi], hi, g1[gi]
     xc, gc = math.nan, math.nan
+    slope = math.nan
     k = 0
     k_pred = 0
     w_old = 1.0
@@ -145,11 +167,17 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
         else:
             halve = False
             if k > k_pred:
-                x = inverse_quadratic(xa, ga, xb, gb, xc, gc, lo, hi)  # noqa: F821
+                if math.isfinite(slope) and slope != 0.0:
+                    x = xb - gb / slope
+                    slope = math.nan
+                else:
+                    x = inverse_quadratic(xa, ga, xb, gb, xc, gc, lo, hi)  # noqa: F821
                 if k % 2 == 0:
                     halve = hi - lo > 0.5 * w_old
                     w_old = hi - lo
-            x = safeguarded_trial(x, lo, hi, width, halve)  # noqa: F821
+            else:
+                x += 0.5 * width   # the first trial on a target: aimed past its root (see contact_loop)
+            x = safeguarded_trial(x, lo, hi, width, halve, 0.75)  # noqa: F821
         if not lo < x < hi:
             break   # the bracket is as narrow as the floating-point resolution allows
         k += 1
@@ -159,26 +187,32 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
         else:
             counters[C_RHS] += rk_step(mode, t, y, x * dt, p, k1, k2, k3, k4, tmp, ymid, tab, K)
         guards(mode, t + x * dt, ymid, p, gm)  # noqa: F821
+        if predicted:
+            guard_rates(mode, t + x * dt, ymid, p, dm)  # noqa: F821
+        else:
+            for i in range(ng):
+                dm[i] = math.nan
         counters[C_LOCATION_SUBSTEPS] += 1
         c = first_crossing(mode, g0, gm)
         if c >= 0:
             hi = x
             for i in range(n):
                 y1[i] = ymid[i]
-            for i in range(ng):
-                g1[i] = gm[i]
+            copy_guards(g1, d1, gm, dm)
         else:
             lo = x
-            for i in range(ng):
-                glo[i] = gm[i]
+            copy_guards(glo, dlo, gm, dm)
         if c >= 0 and c != gi:
-            gi, x = earliest_chord(mode, glo, g1, lo, hi)   # an earlier crossing of another guard
+            gi, x = earliest_predicted(mode, glo, g1, dlo, d1, lo, hi, dt)   # an earlier crossing of another guard
             if gi < 0:
                 gi = c
             xa, ga, xb, gb = lo, glo[gi], hi, g1[gi]
             xc, gc = math.nan, math.nan
+            slope = math.nan
             k_pred = k
             continue
+        if k == k_pred + 1 and math.isfinite(dm[gi]):
+            slope = dm[gi] * dt   # the next trial: a Newton step on the guard's own rate
         xc, gc = xa, ga
         xa, ga = xb, gb
         xb, gb = x, gm[gi]
@@ -252,6 +286,10 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
     g1 = np.empty(ng)
     gm = np.empty(ng)
     glo = np.empty(ng)
+    d0 = np.empty(ng)
+    d1 = np.empty(ng)
+    dm = np.empty(ng)
+    dlo = np.empty(ng)
     # stages of a tableau method (``tab``: A, b, c; empty for the fused RK4): s^2 + 2 s entries
     s_tab = int(round(math.sqrt(tab.shape[0] + 1.0))) - 1 if tab.shape[0] > 0 else 0
     K = np.empty((s_tab, n))
@@ -290,7 +328,7 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
                     t = t_end
                     break
                 hi = locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp, y1, ymid,
-                                  g0, g1, gm, glo, tab, K, counters)
+                                  g0, g1, gm, glo, d0, d1, dm, dlo, tab, K, counters)
                 gi = first_crossing(mode, g0, g1)
                 t_sub = t
                 for i in range(n):
