@@ -40,7 +40,7 @@ def test_pair_events_are_the_bisection_roots(law):
         assert abs(a.events["t"][0] - c.events["t"][0]) <= 1.01 * tol * h
         per_event.append((b.counters["location_substeps"] / b.counters["events"],
                           c.counters["location_substeps"] / c.counters["events"]))
-    assert np.mean(per_event, axis=0)[0] <= 5 and np.mean(per_event, axis=0)[1] <= 7
+    assert np.mean(per_event, axis=0)[0] <= 4 and np.mean(per_event, axis=0)[1] <= 4.5
 
 
 @pytest.mark.parametrize("law", ["none", "coulomb", "bilinear"])
