@@ -29,7 +29,7 @@ _VIEWS = ("vec", "mat", "wvec", "law_offset")
 _TEMPLATE_FUNCTIONS = ("runtime", "vec", "mat", "wvec", "law_offset", "record", "factor_stick", "back_substitute", "solve_stick", "slip_bound", "least_cone_ratio",
                        "contact_forces", "rates", "rhs", "rhs_guards", "rk4_step", "rk_step", "guards_of_forces", "eval_guards",
                        "crossed", "first_crossing", "cone_ratio", "first_near_crossing", "guard_rates",
-                       "stick_force_rates",
+                       "stick_force_rates", "stick_solution", "contact_rates",
                        "locate_trial", "copy_guards", "hermite", "hermite_root", "hermite_extremum",
                        "grazing_candidate", "inverse_quadratic", "safeguarded_trial", "predicted_root",
                        "earliest_crossing", "locate_event", "apply_transition", "project_onto_stick", "resolve_friction",

@@ -239,7 +239,6 @@ def contact_forces(t, y, cm, I, R, WI, WF):
     cidx, claw = mat(I, I, O_CIDX, nc, 4), vec(I, I, O_CLAW, nc)
     cgn, cgr = mat(R, I, R_GN, nc, 4), mat(R, I, R_GR, nc, 4)
     cgap, ck = vec(R, I, R_GAP, nc), vec(R, I, R_K, nc)
-    invm = vec(R, I, R_INVM, n)
     F = vec(WF, I, F_F, n)
     cN, cNd, cv, cf, cdl = (vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc),
                             vec(WF, I, F_FR, nc), vec(WF, I, F_DL, nc))
@@ -295,17 +294,9 @@ def contact_forces(t, y, cm, I, R, WI, WF):
                 F[i] -= N * cgn[j, k] + f * cgr[j, k]
     ns = WI[0]
     if ns > 0:
-        sl, env = wvec(WI, nc, 0), wvec(WI, nc, 1)
-        bst, xst = vec(WF, I, F_B, nc), vec(WF, I, F_X, nc)
-        for a in range(ns):
-            j = sl[a]
-            s = 0.0
-            for k in range(4):
-                i = cidx[j, k]
-                if i >= 0:
-                    s += cgr[j, k] * invm[i] * F[i]
-            bst[a] = s
-        solve_stick(ns, env, mat(WF, I, F_L, nc, nc), vec(WF, I, F_D, nc), bst, xst)
+        sl = wvec(WI, nc, 0)
+        xst = vec(WF, I, F_X, nc)
+        stick_solution(F, vec(WF, I, F_B, nc), xst, I, R, WI, WF)
         if WI[1] >= 0:
             least_cone_ratio(y, I, R, WI, WF)
         for a in range(ns):
@@ -491,16 +482,22 @@ def guard_rates(y, dy, cm, I, R, WI, WF, D, with_stick):
             D[j, gi] = math.nan
         if cm[j] == 0:
             continue
-        add = 0.0
-        vd = 0.0
-        for k in range(4):
-            i = cidx[j, k]
-            if i >= 0:
-                add += cgn[j, k] * dy[n + i]
-                vd += cgr[j, k] * dy[n + i]
+        Ndd, vd = contact_rates(j, dy, n, cidx, cgn, cgr, ck)
         fd = xd[pos[j]] if stick_known and pos[j] >= 0 else math.nan
-        law_guard_rates(claw[j], cm[j], cN[j], cNd[j], ck[j] * add, cv[j], vd, cf[j], fd, y,  # noqa: F821
+        law_guard_rates(claw[j], cm[j], cN[j], cNd[j], Ndd, cv[j], vd, cf[j], fd, y,  # noqa: F821
                         law_offset(I, j), R, I, j, dy, D)
+
+
+def contact_rates(j, dy, n, cidx, cgn, cgr, ck):
+    """``(dNd/dt, dv/dt)`` of contact ``j``: its normal force's second derivative and slip acceleration."""
+    add = 0.0
+    vd = 0.0
+    for k in range(4):
+        i = cidx[j, k]
+        if i >= 0:
+            add += cgn[j, k] * dy[n + i]
+            vd += cgr[j, k] * dy[n + i]
+    return ck[j] * add, vd
 
 
 def stick_force_rates(y, dy, cm, I, R, WI, WF):
@@ -518,7 +515,7 @@ def stick_force_rates(y, dy, cm, I, R, WI, WF):
     fs, fc, om = vec(R, I, R_FS, nf), vec(R, I, R_FC, nf), vec(R, I, R_OM, I[H_NG])
     sg, cg = vec(WF, I, F_SG, I[H_NG]), vec(WF, I, F_CG, I[H_NG])
     cidx, claw = mat(I, I, O_CIDX, nc, 4), vec(I, I, O_CLAW, nc)
-    cgn, cgr, ck, invm = mat(R, I, R_GN, nc, 4), mat(R, I, R_GR, nc, 4), vec(R, I, R_K, nc), vec(R, I, R_INVM, n)
+    cgn, cgr, ck = mat(R, I, R_GN, nc, 4), mat(R, I, R_GR, nc, 4), vec(R, I, R_K, nc)
     cN, cNd, cv = vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc)
     Fd, xd = vec(WF, I, F_FD, n), vec(WF, I, F_XD, nc)
     for i in range(n):
@@ -538,30 +535,30 @@ def stick_force_rates(y, dy, cm, I, R, WI, WF):
         K = claw[j]
         fdj = 0.0
         if not IS_STICK[K, mode]:  # noqa: F821
-            add = 0.0
-            vd = 0.0
-            for k in range(4):
-                i = cidx[j, k]
-                if i >= 0:
-                    add += cgn[j, k] * dy[n + i]
-                    vd += cgr[j, k] * dy[n + i]
-            fdj = law_force_rate(K, mode, cN[j], cNd[j], ck[j] * add, cv[j], vd, y,  # noqa: F821
+            Ndd, vd = contact_rates(j, dy, n, cidx, cgn, cgr, ck)
+            fdj = law_force_rate(K, mode, cN[j], cNd[j], Ndd, cv[j], vd, y,  # noqa: F821
                                  law_offset(I, j), R, I, j, dy)
         for k in range(4):
             i = cidx[j, k]
             if i >= 0:
                 Fd[i] -= cNd[j] * cgn[j, k] + fdj * cgr[j, k]
-    ns = WI[0]
+    stick_solution(Fd, xd, xd, I, R, WI, WF)
+
+
+def stick_solution(F, b, x, I, R, WI, WF):
+    """The stick forces ``x`` for generalized forces ``F``: ``W_SS x = b = G_S M^-1 F`` (``b`` may be ``x``)."""
+    n, nc, ns = I[H_N], I[H_NC], WI[0]
     sl, env = wvec(WI, nc, 0), wvec(WI, nc, 1)
+    cidx, cgr, invm = mat(I, I, O_CIDX, nc, 4), mat(R, I, R_GR, nc, 4), vec(R, I, R_INVM, n)
     for a in range(ns):
         j = sl[a]
         s = 0.0
         for k in range(4):
             i = cidx[j, k]
             if i >= 0:
-                s += cgr[j, k] * invm[i] * Fd[i]
-        xd[a] = s
-    solve_stick(ns, env, mat(WF, I, F_L, nc, nc), vec(WF, I, F_D, nc), xd, xd)   # in place
+                s += cgr[j, k] * invm[i] * F[i]
+        b[a] = s
+    solve_stick(ns, env, mat(WF, I, F_L, nc, nc), vec(WF, I, F_D, nc), b, x)
 
 
 def locate_trial(t, y, dt, frac, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counters):
