@@ -115,3 +115,19 @@ def test_no_convergence_is_an_error_with_the_history():
 def test_periods_must_be_positive():
     with pytest.raises(ValueError, match="periods"):
         find_periodic_orbit(BladePair().build(), periods=0)
+
+
+def test_the_orbit_command(capsys):
+    """``blademodel orbit MODEL.yaml --json``: the same orbit as the Python call; bad settings exit 2."""
+    import json
+    from pathlib import Path
+
+    from blademodel.cli import main
+    yaml = str(Path(__file__).resolve().parent.parent / "models" / "blade_pair_coulomb.yaml")
+    assert main(["orbit", yaml, "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    o = find_periodic_orbit(BladePair(friction="coulomb").build())
+    assert np.allclose([rep["state"][n] for n in o.state_names], o.state, rtol=0, atol=1e-12)
+    assert rep["stable"] is True and abs(rep["multipliers"][0]["abs"] - abs(o.multipliers[0])) < 1e-9
+    assert main(["orbit", yaml, "--periods", "0"]) == 2
+    assert "--periods must be at least 1" in capsys.readouterr().err
