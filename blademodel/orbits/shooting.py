@@ -1,0 +1,249 @@
+"""Periodic orbits by shooting: Newton's method on the period map, Floquet multipliers at the solution."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .period_map import FlowError, PeriodMap, _copy
+
+
+class ShootingError(RuntimeError):
+    """Newton's method on the period map did not converge; ``history`` holds the scaled residuals."""
+
+    def __init__(self, message: str, history: list, state: np.ndarray):
+        super().__init__(message)
+        self.history = history
+        self.state = state
+
+
+@dataclass
+class PeriodicOrbit:
+    """A periodic orbit of the hybrid flow and its stability.
+
+    Attributes
+    ----------
+    state : ndarray
+        The physical state at ``t = 0`` (mod ``periods * period``), SI units.
+    mode : int or ndarray
+        Its hybrid mode (an array of contact modes on the per-contact kernel).
+    periods : int
+        The orbit's period in excitation periods.
+    period : float
+        The excitation period ``T`` in s.
+    monodromy : ndarray
+        ``dP/dy`` at ``state``: the Jacobian of the map over ``periods * period``.
+    multipliers : ndarray of complex
+        Its eigenvalues, largest modulus first.
+    residual : float
+        ``max |P(y) - y| / scale`` at ``state``.
+    history : list of float
+        The scaled residual before each Newton step, then at the solution.
+    state_names : list of str
+    scale : ndarray
+        The scale of each state used for the residual and the difference steps.
+    t, y : ndarray
+        The orbit sampled at every step over ``periods * period`` (``y`` physical states).
+    """
+
+    state: np.ndarray
+    mode: object
+    periods: int
+    period: float
+    monodromy: np.ndarray
+    multipliers: np.ndarray
+    residual: float
+    history: list
+    state_names: list
+    scale: np.ndarray
+    t: np.ndarray = field(repr=False)
+    y: np.ndarray = field(repr=False)
+
+    @property
+    def stable(self) -> bool:
+        """All multipliers inside the unit circle."""
+        return bool(np.max(np.abs(self.multipliers)) < 1.0)
+
+    @property
+    def largest_multiplier(self) -> complex:
+        return complex(self.multipliers[0])
+
+    def amplitudes(self) -> dict:
+        """Half the peak-to-peak excursion of each state over the orbit, by name."""
+        a = 0.5 * (self.y.max(axis=0) - self.y.min(axis=0))
+        return dict(zip(self.state_names, map(float, a)))
+
+    def harmonic(self, name: str, k: int = 1) -> complex:
+        """Complex amplitude of the ``k``-th harmonic of the excitation in state ``name`` over the orbit.
+
+        ``x(t) = sum_k Re(X_k exp(i k omega t))``; ``k`` may be a fraction ``j / periods``
+        (subharmonics of a period-``n`` orbit).
+        """
+        i = self.state_names.index(name)
+        x = self.y[:-1, i]
+        m = x.size
+        j = k * self.periods
+        if abs(j - round(j)) > 1e-12:
+            raise ValueError(f"harmonic {k} is not a multiple of 1/{self.periods}")
+        c = np.fft.rfft(x)[int(round(j))] / m
+        return complex(2.0 * c) if round(j) else complex(c)
+
+
+def _state_scale(y_hist: np.ndarray, n_q: int) -> np.ndarray:
+    """Per-state scale for residuals and difference steps: each state's excursion, floored by its group's."""
+    amp = np.max(np.abs(y_hist), axis=0)
+    scale = amp.copy()
+    n = amp.size
+    for sl in (slice(0, n_q), slice(n_q, 2 * n_q), slice(2 * n_q, n)):
+        if sl.start < sl.stop:
+            g = np.max(amp[sl])
+            scale[sl] = np.maximum(scale[sl], 1e-3 * g)
+    return np.maximum(scale, 1e-300) if np.any(scale > 0) else np.ones(n)
+
+
+def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, transient: int = 20,
+                        tol: float = 1e-10, max_iter: int = 30, rel_step: float = 1e-6,
+                        steps_per_period: int = 1000, event_tol: float = 1e-10, method: str = "rk4",
+                        kernel: str = "auto", integrator=None) -> PeriodicOrbit:
+    """A periodic orbit of ``periods`` excitation periods by shooting on the exact hybrid flow.
+
+    Newton's method on ``r(y) = P(y) - y``, ``P`` the map over ``periods * T``
+    (:class:`~blademodel.orbits.period_map.PeriodMap`), with the Jacobian
+    ``dP/dy`` by central differences, each state scaled by its excursion; a step
+    that does not reduce the residual is halved (up to eight times). The Floquet
+    multipliers are the eigenvalues of ``dP/dy`` at the solution. Unstable orbits
+    are found as readily as stable ones: nothing here integrates toward an attractor
+    but the optional transient that makes the guess.
+
+    Parameters
+    ----------
+    model : Model
+        A built model (``config.build()``).
+    periods : int
+        Period of the orbit in excitation periods (2 for period-2 ...).
+    guess : array_like or dict, optional
+        State at ``t = 0``; by default the state after ``transient`` periods from rest.
+    mode : int or array, optional
+        The guess's hybrid mode; by default the one its state belongs to.
+    transient : int
+        Periods integrated from rest (or from ``guess``) before the first step.
+    tol : float
+        Converged when ``max |P(y) - y| / scale <= tol``.
+    max_iter : int
+        Newton steps allowed.
+    rel_step : float
+        Difference step relative to each state's scale.
+    steps_per_period, event_tol, method, kernel
+        The integrator's settings (:func:`blademodel.numeric.simulate`).
+    integrator : Integrator, optional
+        Use this integrator (its settings) instead of making one.
+
+    Returns
+    -------
+    PeriodicOrbit
+
+    Raises
+    ------
+    ShootingError
+        If Newton's method does not reach ``tol`` in ``max_iter`` steps or the
+        residual stops decreasing; the error carries the residual history.
+    FlowError
+        If an integration fails.
+    """
+    from ..numeric.kernels import make_integrator
+    if integrator is None:
+        integrator = make_integrator(model, kernel=kernel, steps_per_period=steps_per_period,
+                                     event_tol=event_tol, method=method)
+    ig = integrator
+    P = PeriodMap(ig, periods)
+    n = P.n
+    y_full = ig.initial_state(guess)
+    if mode is None:
+        mode = ig.mode_of(y_full)
+    mode = _copy(mode)
+    if transient > 0:
+        status, mode, t = ig.advance(y_full, mode, 0, int(transient))
+        if status != 0:
+            raise FlowError(f"the transient stopped at t = {t:.6g} s with status {status}")
+    y = y_full[:n].copy()
+    n_q = _n_coordinates(ig)
+    scale = _state_scale(_orbit_samples(ig, y, mode, periods)[1], n_q)
+
+    history = []
+    for _ in range(3):
+        y, mode_end = _newton(P, y, mode, scale, tol, max_iter, rel_step, history)
+        if _same(mode_end, mode):
+            break
+        # converged in a mode the orbit does not come back to (the section state lies on a
+        # switching boundary of the guess's mode): start again in the mode it does come back to
+        mode = _copy(mode_end)
+    else:
+        raise ShootingError(f"the orbit does not come back to its mode at the section (mode {mode!r} -> "
+                            f"{mode_end!r}): it switches exactly there", history, y)
+    J = P.jacobian(y, mode, scale, rel_step)
+    mu = np.linalg.eigvals(J)
+    mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+    t_orbit, y_orbit = _orbit_samples(ig, y, mode, periods)
+    return PeriodicOrbit(state=y, mode=_copy(mode), periods=int(periods), period=ig.period, monodromy=J,
+                         multipliers=mu, residual=history[-1], history=history,
+                         state_names=list(ig.meta["state"][:n]), scale=scale, t=t_orbit, y=y_orbit)
+
+
+def _newton(P, y, mode, scale, tol, max_iter, rel_step, history):
+    """Newton's method on ``P(y) - y`` from ``(y, mode)``; the solution and the mode ``P`` ends in."""
+    n = y.size
+    for it in range(max_iter + 1):
+        Py, mode_end = P(y, _copy(mode))
+        r = (Py - y) / scale
+        res = float(np.max(np.abs(r)))
+        history.append(res)
+        if res <= tol:
+            return y, mode_end
+        if it == max_iter:
+            raise ShootingError(f"shooting did not converge in {max_iter} Newton steps: scaled residual "
+                                f"{res:.3g} > tol = {tol:g} (history: {_show(history)})", history, y)
+        J = P.jacobian(y, mode, scale, rel_step)
+        Js = (J - np.eye(n)) * scale[None, :] / scale[:, None]
+        step = np.linalg.lstsq(Js, -r, rcond=None)[0] * scale
+        lam = 1.0
+        for _ in range(9):
+            y_try = y + lam * step
+            try:
+                r_try = (P(y_try, _copy(mode))[0] - y_try) / scale
+                if np.max(np.abs(r_try)) < res:
+                    break
+            except FlowError:
+                pass
+            lam *= 0.5
+        else:
+            raise ShootingError(f"shooting stalled: no step along the Newton direction reduces the scaled "
+                                f"residual {res:.3g} (history: {_show(history)})", history, y)
+        y = y_try
+
+
+def _show(history) -> str:
+    return ", ".join(f"{h:.2g}" for h in history)
+
+
+def _same(a, b) -> bool:
+    return bool(np.array_equal(np.asarray(a), np.asarray(b)))
+
+
+def _n_coordinates(ig) -> int:
+    """Number of generalized coordinates (the state starts with them, then their velocities)."""
+    names = ig.meta["state"]
+    return sum(1 for s in names if ("v" + s) in names)
+
+
+def _orbit_samples(ig, y, mode, periods):
+    """The trajectory from ``(y, mode)`` at every step over ``periods`` periods: ``t`` and physical states."""
+    n = ig.n_physical
+    full = np.zeros(ig.n_state)
+    full[:n] = y
+    m = periods * ig.steps_per_period + 1
+    rec = ig.record_buffer(m)
+    status, _, t = ig.advance(full, _copy(mode), 0, periods, n_transient=0, record=rec)
+    if status != 0:
+        raise FlowError(f"the integration stopped at t = {t:.6g} s with status {status}")
+    return rec[0].copy(), rec[1][:, :n].copy()
