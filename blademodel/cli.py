@@ -16,7 +16,7 @@ from typing import Optional, Sequence
 from . import __version__
 
 #: Subcommand modules of :mod:`blademodel.commands`, in help order.
-COMMANDS = ["equations", "simulate", "orbit", "sweep", "reproduce", "plot"]
+COMMANDS = ["equations", "simulate", "orbit", "continue_", "sweep", "reproduce", "plot"]
 
 #: Exit code of a usage or config error (as argparse uses).
 EXIT_USAGE = 2

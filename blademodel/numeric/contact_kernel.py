@@ -312,7 +312,7 @@ class ContactIntegrator(Integrator):
         A rigid stick mode is replaced by slip: a constraint cannot raise the
         highest natural frequency (Rayleigh), so slip bounds it.
         """
-        from .stability import _ray_limit
+        from .stability import stable_step
         configs = [np.zeros(self.nc, dtype=np.int64)]
         kinds = self.kmeta["kinds"]
         depth = max([len(k["modes"]) for k in kinds] + [1])
@@ -334,12 +334,9 @@ class ContactIntegrator(Integrator):
                 y1 = y0.copy()
                 y1[i] = 1.0
                 J[:, i] = self.rhs(0.0, y1, cm)[:n] - f0
-            for lam in np.linalg.eigvals(J):
-                if lam.real > 1e-9 * max(abs(lam), 1.0):
-                    continue
-                h = _ray_limit(complex(lam), self.method.amplification)
-                if h < best:
-                    best, which = h, self.mode_label(cm)
+            h = stable_step(J, self.method.amplification)
+            if h < best:
+                best, which = h, self.mode_label(cm)
         return best, which
 
     # --- integration ------------------------------------------------------------------------------

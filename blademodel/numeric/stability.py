@@ -16,20 +16,33 @@ def rk4_amplification(z: np.ndarray) -> np.ndarray:
     return 1 + z + z ** 2 / 2 + z ** 3 / 6 + z ** 4 / 24
 
 
-def _ray_limit(lam: complex, amplification=rk4_amplification) -> float:
-    """Largest ``h`` with ``|R(h lam)| <= 1`` along the ray of ``lam`` (``R``: ``amplification``)."""
-    if abs(lam) == 0.0:
-        return math.inf
-    lo, hi = 0.0, 10.0 / abs(lam)  # the regions of RK4 and RK8 lie within |z| < 3 and < 7
-    if abs(amplification(hi * lam)) <= 1.0:
-        return math.inf  # only for Re(lam) > 0 would this fail: growth is then physical
+def ray_limits(lams, amplification=rk4_amplification) -> np.ndarray:
+    """Largest ``h`` with ``|R(h lam)| <= 1`` along the ray of each ``lam`` (``R``: ``amplification``).
+
+    A bisection of 60 halvings, all rays at once (one call of ``amplification`` on an
+    array per halving); ``inf`` for ``lam = 0`` and where the method's region does not
+    end on the ray.
+    """
+    lams = np.asarray(lams, dtype=complex).ravel()
+    out = np.full(lams.shape, math.inf)
+    live = np.abs(lams) > 0.0
+    lam = lams[live]
+    lo, hi = np.zeros(lam.shape), 10.0 / np.abs(lam)  # the regions of RK4 and RK8 lie within |z| < 3 and < 7
+    bounded = np.abs(amplification(hi * lam)) > 1.0  # unbounded only for Re(lam) > 0: growth is then physical
     for _ in range(60):
         mid = 0.5 * (lo + hi)
-        if abs(amplification(mid * lam)) <= 1.0 + 1e-12:
-            lo = mid
-        else:
-            hi = mid
-    return lo
+        inside = np.abs(amplification(mid * lam)) <= 1.0 + 1e-12
+        lo = np.where(inside, mid, lo)
+        hi = np.where(inside, hi, mid)
+    out[np.flatnonzero(live)[bounded]] = lo[bounded]
+    return out
+
+
+def stable_step(J: np.ndarray, amplification=rk4_amplification) -> float:
+    """Largest stable step for the state Jacobian ``J`` (its physically unstable modes left out)."""
+    lam = np.linalg.eigvals(J)
+    lam = lam[~(lam.real > 1e-9 * np.maximum(np.abs(lam), 1.0))]
+    return float(np.min(ray_limits(lam, amplification))) if lam.size else math.inf
 
 
 def max_stable_step(jacobian, n_modes: int, p: np.ndarray, n_state: int,
@@ -50,13 +63,9 @@ def max_stable_step(jacobian, n_modes: int, p: np.ndarray, n_state: int,
     """
     best, which = math.inf, -1
     for mode in range(n_modes):
-        J = jacobian(mode, p)[:n_state, :n_state]
-        for lam in np.linalg.eigvals(J):
-            if lam.real > 1e-9 * max(abs(lam), 1.0):
-                continue  # an unstable physical mode: no step makes it decay
-            h = _ray_limit(complex(lam), amplification)
-            if h < best:
-                best, which = h, mode
+        h = stable_step(jacobian(mode, p)[:n_state, :n_state], amplification)
+        if h < best:
+            best, which = h, mode
     return best, which
 
 

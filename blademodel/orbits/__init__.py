@@ -9,7 +9,9 @@ monodromy matrix) are the orbit's Floquet multipliers. The Jacobian is taken by
 central differences of the map (``docs/orbits.md``).
 """
 
+from .arclength import Branch, SpecialPoint, continuation
 from .period_map import FlowError, PeriodMap
 from .shooting import PeriodicOrbit, ShootingError, find_periodic_orbit
 
-__all__ = ["FlowError", "PeriodMap", "PeriodicOrbit", "ShootingError", "find_periodic_orbit"]
+__all__ = ["Branch", "FlowError", "PeriodMap", "PeriodicOrbit", "ShootingError", "SpecialPoint", "continuation",
+           "find_periodic_orbit"]

@@ -37,6 +37,7 @@ class PeriodMap:
         ig = self.integrator
         full = np.zeros(ig.n_state)
         full[:self.n] = y
+        mode = settle(ig, full, mode)
         status, mode_end, t = ig.advance(full, mode, 0, self.periods)
         self.evaluations += 1
         if status != 0:
@@ -60,6 +61,32 @@ class PeriodMap:
             ym[i] -= d
             J[:, i] = (self(yp, _copy(mode))[0] - self(ym, _copy(mode))[0]) / (2.0 * d)
         return J
+
+
+def settle(integrator, y, mode):
+    """The mode ``y`` starts in: ``mode`` with every guard already past zero at ``t = 0`` fired.
+
+    The kernels fire a guard when it *crosses* zero within a step; a start state that
+    already lies past one (a section state on the far side of a stick-slip or contact
+    boundary of ``mode``) would otherwise follow ``mode``'s flow. Firing it makes the
+    period map continuous across the boundary, which shooting and continuation cross
+    when the orbit's switching time passes the section. The product-mode kernel only:
+    the per-contact kernel's guard functions are not callable from Python, and there
+    the mode is taken as given. ``y`` may be reset in place (a transition's reset).
+    """
+    if isinstance(mode, np.ndarray) or not hasattr(integrator, "module"):
+        return mode
+    mod = integrator.module
+    g = np.empty(mod.GUARD_DIR.shape[1] + 1)
+    tmp = np.empty(y.shape[0])
+    for _ in range(4):
+        mod.guards(mode, 0.0, y, integrator.p, g)
+        past = [i for i in range(mod.N_GUARDS[mode])
+                if (mod.GUARD_DIR[mode, i] < 0 and g[i] < 0.0) or (mod.GUARD_DIR[mode, i] > 0 and g[i] > 0.0)]
+        if not past:
+            break
+        mode = int(mod.transition(mode, past[0], 0.0, y, integrator.p, tmp))
+    return mode
 
 
 def _copy(mode):

@@ -1,0 +1,102 @@
+"""``blademodel continue MODEL.yaml --param NAME --from A --to B``: a branch of periodic orbits."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+import numpy as np
+
+from ..config import ConfigError, apply_overrides, load_config
+from ..orbits import FlowError, ShootingError, continuation
+from . import jsonout
+from .common import add_model_arguments, parse_overrides
+from .output import check_output_file
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``continue`` subcommand."""
+    p = subparsers.add_parser("continue", help="follow periodic orbits in a parameter (FRFs, bifurcations)",
+                              description="Find a periodic orbit at --from, then follow it by pseudo-arclength "
+                                          "continuation in the config field --param toward --to, around folds; "
+                                          "report each orbit's stability and the folds, period doublings and "
+                                          "Neimark-Sacker bifurcations found.")
+    add_model_arguments(p)
+    p.add_argument("--param", required=True, metavar="NAME", help="config field, e.g. omega (an FRF) or gamma")
+    p.add_argument("--from", dest="start", type=float, required=True, metavar="A", help="start value")
+    p.add_argument("--to", dest="stop", type=float, required=True, metavar="B", help="end value")
+    p.add_argument("--period", type=int, default=1, metavar="N", help="period of the orbits (default 1)")
+    p.add_argument("--transient", type=int, default=20, metavar="M",
+                   help="periods from rest for the first guess (default 20)")
+    p.add_argument("--max-points", type=int, default=400, metavar="K", help="points at most (default 400)")
+    p.add_argument("--ds-max", type=float, default=0.05, help="largest arclength step (default 0.05)")
+    p.add_argument("--steps-per-period", type=int, default=1000, metavar="S",
+                   help="steps per excitation period (default 1000)")
+    p.add_argument("--method", choices=("rk4", "rk8"), default="rk4", help="stepping method (default rk4)")
+    p.add_argument("--state", default=None, help="state plotted and reported (default: the first coordinate)")
+    p.add_argument("--out", metavar="FILE.nc", help="write the branch (NetCDF)")
+    p.add_argument("--plot", metavar="FILE.png", help="draw the branch (stable solid, unstable dashed)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(run=run)
+    return p
+
+
+def _progress(point: int, value: float) -> None:
+    if sys.stderr.isatty():
+        print(f"\rpoint {point}: {value:.6g}", end="", file=sys.stderr)
+    elif point % 25 == 0:
+        print(f"point {point}: {value:.6g}", file=sys.stderr)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Continue the branch; return the exit code."""
+    for name in ("period", "max_points", "steps_per_period"):
+        if getattr(args, name) < 1:
+            raise ValueError(f"--{name.replace('_', '-')} must be at least 1, got {getattr(args, name)}")
+    if args.start == args.stop:
+        raise ValueError(f"--from and --to must differ, got {args.start:g} twice")
+    if args.out:
+        check_output_file(args.out, ".nc", what="NetCDF file")
+    if args.plot:
+        check_output_file(args.plot, ".png", option="--plot", what="PNG image")
+    config = apply_overrides(load_config(args.model), parse_overrides(args.overrides))
+    try:
+        config.build()
+    except ValueError as e:
+        raise ConfigError(f"{args.model}: {e}", path=str(args.model)) from None
+    try:
+        branch = continuation(config, args.param, args.start, args.stop, periods=args.period,
+                              transient=args.transient, max_points=args.max_points, ds_max=args.ds_max,
+                              steps_per_period=args.steps_per_period, method=args.method, progress=_progress)
+    except (ShootingError, FlowError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    if sys.stderr.isatty():
+        print(file=sys.stderr)
+    state = args.state or branch.state_names[0]
+    if state not in branch.state_names:
+        raise ValueError(f"--state {state!r}: not a state of the model ({', '.join(branch.state_names)})")
+    if args.out:
+        from ..orbits.branch_file import save_branch
+        save_branch(branch, args.out, config)
+    if args.plot:
+        from ..plots.branch import branch_figure
+        branch_figure(branch, state).savefig(args.plot, dpi=120)
+    i = branch.state_names.index(state)
+    rep = {"field": branch.field, "periods": branch.periods, "points": len(branch.params),
+           "message": branch.message, "values": branch.params.tolist(),
+           "harmonic1": np.abs(branch.harmonics[:, i]).tolist(), "stable": branch.stable.tolist(),
+           "special": [{"kind": p.kind, "value": p.param, "multiplier": [p.multiplier.real, p.multiplier.imag]}
+                       for p in branch.special], "state": state}
+    if args.json:
+        print(jsonout.dumps(rep))
+        return 0
+    print(f"{len(branch.params)} period-{branch.periods} orbits from {args.param} = {branch.params[0]:.6g} to "
+          f"{branch.params[-1]:.6g} ({branch.message}); {int(np.sum(~branch.stable))} unstable")
+    for p in branch.special:
+        print(f"  {p.kind} at {args.param} = {p.param:.8g} (multiplier {p.multiplier.real:.6g}"
+              f"{p.multiplier.imag:+.6g}i)")
+    for what, name in (("saved", args.out), ("plotted", args.plot)):
+        if name:
+            print(f"{what} {name}")
+    return 0

@@ -1,0 +1,423 @@
+"""Pseudo-arclength continuation of periodic orbits in a config field, with their bifurcations.
+
+A branch of period-``n`` orbits is the curve ``P(y; lambda) = y`` in the space of the
+section state ``y`` and one config field ``lambda`` (the excitation frequency for a
+forced-response curve, ``gamma``, ``F0``, the gap ...). It is followed by
+pseudo-arclength continuation: a step ``ds`` along the tangent, then Newton's method on
+the orbit condition plus the arclength condition, so the branch is followed around
+folds. Both the state and the field are scaled (each state by its excursion on the
+first orbit, the field by the continuation range), the Jacobians are central
+differences of the period map (:class:`~blademodel.orbits.period_map.PeriodMap`; the
+field's column from maps built at ``lambda +- delta``), and the step grows after easy
+corrections and is halved after hard or failed ones.
+
+Each point carries its Floquet multipliers. A change in the number of multipliers
+outside the unit circle between two points is a bifurcation, located by bisection on
+the arclength and classified by the multiplier that crossed: through ``+1`` a fold
+(the field's tangent component changes sign there too), through ``-1`` a period
+doubling, a complex pair a Neimark-Sacker bifurcation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .period_map import FlowError, PeriodMap, _copy
+from .shooting import _n_coordinates, _orbit_samples, _same, _state_scale, find_periodic_orbit
+
+
+@dataclass
+class SpecialPoint:
+    """A bifurcation found on a branch.
+
+    Attributes
+    ----------
+    kind : str
+        ``"fold"``, ``"period-doubling"`` or ``"neimark-sacker"``.
+    param : float
+        The field's value there (located to ``locate_tol`` of the range).
+    state : ndarray
+        The orbit's section state there.
+    multiplier : complex
+        The multiplier that crossed the unit circle, at the located point.
+    index : int
+        The branch point after which it lies.
+    """
+
+    kind: str
+    param: float
+    state: np.ndarray
+    multiplier: complex
+    index: int
+
+
+@dataclass
+class Branch:
+    """A continued branch of periodic orbits.
+
+    Attributes
+    ----------
+    field : str
+        The continued config field.
+    periods : int
+    params : ndarray, shape (points,)
+    states : ndarray, shape (points, states)
+        Section states at ``t = 0``.
+    multipliers : ndarray, shape (points, states), complex
+        Floquet multipliers per point, largest modulus first.
+    stable : ndarray of bool
+    amplitudes : ndarray, shape (points, states)
+        Half the peak-to-peak excursion of each state over the orbit.
+    harmonics : ndarray, shape (points, states), complex
+        First harmonic (of the excitation) of each state.
+    special : list of SpecialPoint
+    state_names : list of str
+    message : str
+        Why the continuation ended.
+    """
+
+    field: str
+    periods: int
+    params: np.ndarray
+    states: np.ndarray
+    multipliers: np.ndarray
+    stable: np.ndarray
+    amplitudes: np.ndarray
+    harmonics: np.ndarray
+    special: list = field(default_factory=list)
+    state_names: list = field(default_factory=list)
+    message: str = ""
+
+    def points(self, kind: str) -> list:
+        """The special points of one kind."""
+        return [p for p in self.special if p.kind == kind]
+
+
+class _Family:
+    """Period maps of the config at any value of the field (integrators made on demand, a few kept)."""
+
+    def __init__(self, config, name: str, periods: int, settings: dict):
+        if name not in type(config).model_fields:
+            raise ValueError(f"{type(config).__name__} has no field {name!r} to continue in "
+                             f"(fields: {', '.join(type(config).model_fields)})")
+        self.config, self.name, self.periods, self.settings = config, name, periods, settings
+        self.first = getattr(config, name)
+        self._cache: dict = {}
+
+    def config_at(self, value: float):
+        return type(self.config).model_validate({**self.config.model_dump(), self.name: float(value)})
+
+    def map_at(self, value: float) -> PeriodMap:
+        key = float(value)
+        if key not in self._cache:
+            from ..numeric.kernels import make_integrator
+            if len(self._cache) > 8:
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[key] = PeriodMap(make_integrator(self.config_at(key).build(), **self.settings),
+                                         self.periods)
+        return self._cache[key]
+
+
+def continuation(config, name: str, start: float, stop: float, *, periods: int = 1, guess=None, mode=None,
+                 transient: int = 20, ds: float = 0.01, ds_min: float = 1e-5, ds_max: float = 0.05,
+                 max_points: int = 400, tol: float = 1e-10, max_corrections: int = 8, rel_step: float = 1e-6,
+                 locate_tol: float = 1e-7, steps_per_period: int = 1000, event_tol: float = 1e-10,
+                 method: str = "rk4", kernel: str = "auto",
+                 progress: Callable[[int, float], None] | None = None) -> Branch:
+    """Follow the periodic orbits of ``config`` as its field ``name`` goes from ``start`` toward ``stop``.
+
+    Parameters
+    ----------
+    config : pydantic config
+        E.g. :class:`~blademodel.config.BladePair`; rebuilt at each value of the field.
+    name : str
+        The field: ``"omega"`` for a forced-response curve, or ``"gamma"``, ``"F0"`` ...
+    start, stop : float
+        The range; the branch starts at ``start`` and ends when the field leaves the range
+        (it may turn back at folds in between).
+    periods : int
+        Period of the orbits in excitation periods.
+    guess, mode, transient
+        The first orbit's guess, as for :func:`~blademodel.orbits.find_periodic_orbit`.
+    ds, ds_min, ds_max : float
+        Arclength step, in units of the scaled state and of the range ``|stop - start|``.
+    max_points : int
+        Points at most.
+    tol : float
+        Scaled residual of each corrected point.
+    max_corrections : int
+        Newton steps per point before the step is halved.
+    rel_step : float
+        Difference step relative to each state's scale (and to the range, for the field).
+    locate_tol : float
+        Bifurcations are located to this fraction of the range.
+    steps_per_period, event_tol, method, kernel
+        The integrator's settings.
+    progress : callable, optional
+        ``progress(point, value)`` after each point.
+
+    Returns
+    -------
+    Branch
+    """
+    settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
+    fam = _Family(config, name, periods, settings)
+    span = abs(stop - start)
+    if not span > 0:
+        raise ValueError(f"start and stop must differ, got {start!r} and {stop!r}")
+    direction = 1.0 if stop > start else -1.0
+    P0 = fam.map_at(start)
+    first = find_periodic_orbit(None, periods=periods, guess=guess, mode=mode, transient=transient, tol=tol,
+                                rel_step=rel_step, integrator=P0.integrator)
+    ig = P0.integrator
+    scale = first.scale
+    n = scale.size
+    ctx = _Context(fam, scale, span, tol, rel_step, max_corrections)
+    n_q = _n_coordinates(ig)
+
+    # scaled unknowns X = (y / scale, lambda / span)
+    X = np.append(first.state / scale, start / span)
+    m = first.mode
+    A = ctx.jacobian(X, m)
+    T = _tangent(A, np.append(np.zeros(n), direction))
+    pts = [ctx.point(X, m, A)]
+    special: list = []
+    h = ds
+    message = f"reached {name} = {stop:g}"
+    jumped = False
+    while len(pts) < max_points:
+        X_new, m_new, A_new = ctx.correct(X + h * T, T, m, A)
+        secant = False
+        if X_new is None and abs(T[-1]) > 0.1:
+            # Newton on the arclength system can cycle across a kink of the map (a switching
+            # time passing the section); away from folds, shooting at the predicted value does not
+            X_new, m_new, A_new = ctx.correct_at_value(X + h * T, m)
+            secant = X_new is not None
+        if X_new is None:
+            if h / 2 < ds_min:
+                if not jumped and len(pts) > 1:
+                    # halving brought the prediction ever closer to a kink of the map (a switching
+                    # time passing the section), where the difference quotients, and so the tangent,
+                    # straddle it: jump across along the secant of the last two points instead
+                    prev = np.append(pts[-2]["state"] / ctx.scale, pts[-2]["param"] / span)
+                    if np.linalg.norm(X - prev) > 0:
+                        T = (X - prev) / np.linalg.norm(X - prev)
+                        A = None
+                    jumped, h = True, 4 * ds_min * max(1.0, ds / ds_min) ** 0.5
+                    continue
+                message = f"the step fell below ds_min = {ds_min:g} at {name} = {X[-1] * span:.6g}: {ctx.why}"
+                break
+            h /= 2
+            continue
+        jumped = False
+        if secant:   # the difference quotients there may straddle the kink: the secant is the tangent
+            T_new = (X_new - X) / np.linalg.norm(X_new - X)
+        else:
+            T_new = _tangent(A_new, T)
+        new = ctx.point(X_new, m_new, A_new)
+        special += ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
+        pts.append(new)
+        # each state scaled by its excursion on the newest orbit: amplitudes that grow a
+        # hundredfold through a resonance do not shrink the steps a hundredfold
+        X, T, A = ctx.rescale(_state_scale(new["Y"], n_q), X_new, T_new, A_new)
+        new["X"], new["A"] = X, A
+        m = m_new
+        h = min(h * 1.5, ds_max) if ctx.iterations <= 4 else (h if ctx.iterations <= 8 else h / 2)
+        if progress is not None:
+            progress(len(pts), X[-1] * span)
+        lam = X[-1] * span
+        if (lam - stop) * direction > 0 or (lam - start) * direction < -1e-12 * span:
+            break
+    else:
+        message = f"stopped after max_points = {max_points} points at {name} = {X[-1] * span:.6g}"
+    k = len(pts)
+    return Branch(field=name, periods=periods, params=np.array([p["param"] for p in pts]),
+                  states=np.array([p["state"] for p in pts]), multipliers=np.array([p["mu"] for p in pts]),
+                  stable=np.array([p["stable"] for p in pts], dtype=bool),
+                  amplitudes=np.array([p["amp"] for p in pts]), harmonics=np.array([p["h1"] for p in pts]),
+                  special=special, state_names=list(ig.meta["state"][:n]),
+                  message=message if k < max_points else f"stopped after max_points = {max_points} points")
+
+
+def _tangent(A, previous):
+    """The unit null vector of ``A`` (``n x (n + 1)``) pointing the way of ``previous``."""
+    M = np.vstack([A, previous])
+    rhs = np.zeros(A.shape[0] + 1)
+    rhs[-1] = 1.0
+    t = np.linalg.solve(M, rhs)
+    t /= np.linalg.norm(t)
+    return t if np.dot(t, previous) >= 0 else -t
+
+
+class _Context:
+    """Residuals, Jacobians, corrections and bifurcation tests in the scaled unknowns."""
+
+    def __init__(self, fam: _Family, scale, span, tol, rel_step, max_corrections):
+        self.fam, self.scale, self.span = fam, scale, span
+        self.tol, self.rel_step, self.max_corrections = tol, rel_step, max_corrections
+        self.n = scale.size
+        self.iterations = 0
+        self.why = ""
+
+    def correct_at_value(self, X, mode):
+        """Shooting at the field's value of the prediction ``X`` (no arclength condition); ``(None, ..)`` on failure."""
+        from .shooting import ShootingError, _newton
+        lam = X[-1] * self.span
+        try:
+            P = self.fam.map_at(lam)
+            y, mode_end = _newton(P, X[:-1] * self.scale, mode, self.scale, self.tol, self.max_corrections,
+                                  self.rel_step, [])
+        except (ShootingError, FlowError, np.linalg.LinAlgError, ValueError) as e:
+            self.why = f"{self.why}; shooting at {self.fam.name} = {lam:.6g}: {e}"
+            return None, mode, None
+        if not _same(mode_end, mode):
+            mode = _copy(mode_end)
+        Xc = np.append(y / self.scale, X[-1])
+        self.iterations = self.max_corrections // 2
+        return Xc, mode, self.jacobian(Xc, mode)
+
+    def rescale(self, scale, X, T, A):
+        """``X``, the tangent ``T`` and the Jacobian ``A`` in the state scale ``scale`` (was ``self.scale``)."""
+        n, r = self.n, self.scale / scale
+        X, T, A = X.copy(), T.copy(), A.copy()
+        X[:n] *= r
+        T[:n] *= r
+        T /= np.linalg.norm(T)
+        A[:, :n] *= r[:, None] / r[None, :]
+        A[:, n] *= r
+        self.scale = scale.copy()
+        return X, T, A
+
+    def other_modes(self, mode) -> list:
+        """Start modes to try when the correction fails in ``mode``: every other mode of the product kernel.
+
+        Where the section state crosses a switching boundary between two points (a
+        stick-slip transition at ``t = 0``), starting in the old mode with its guard
+        already past zero follows the wrong flow; one of the other modes is the orbit's.
+        (The per-contact kernel's modes, one per contact, are not enumerated.)
+        """
+        if isinstance(mode, np.ndarray):
+            return []
+        return [m for m in range(len(self.fam.map_at(self.fam.first).integrator.meta["modes"])) if m != mode]
+
+    def residual(self, X, mode):
+        """``(P(y) - y) / scale`` and the mode the map ends in."""
+        P = self.fam.map_at(X[-1] * self.span)
+        y = X[:-1] * self.scale
+        Py, mode_end = P(y, _copy(mode))
+        return (Py - y) / self.scale, mode_end
+
+    def jacobian(self, X, mode):
+        """``d residual / dX`` (``n x (n + 1)``), central differences."""
+        n, d = self.n, self.rel_step
+        P = self.fam.map_at(X[-1] * self.span)
+        y = X[:-1] * self.scale
+        J = P.jacobian(y, mode, self.scale, d)
+        A = np.empty((n, n + 1))
+        A[:, :n] = (J - np.eye(n)) * self.scale[None, :] / self.scale[:, None]
+        lam = X[-1] * self.span
+        Pp, Pm = self.fam.map_at(lam + d * self.span), self.fam.map_at(lam - d * self.span)
+        A[:, n] = (Pp(y, _copy(mode))[0] - Pm(y, _copy(mode))[0]) / self.scale / (2 * d)
+        return A
+
+    def correct(self, X, T, mode, A=None):
+        """Newton on the orbit and arclength conditions from the prediction ``X``; ``(None, ..)`` on failure.
+
+        With ``A`` (the Jacobian at the last point) the first attempt is a chord method:
+        the same matrix every step, only residuals evaluated; then Newton with the
+        Jacobian taken afresh. The orbit must come back to the mode it starts in at the
+        section: converged in another one, or failing where the flow from the
+        prediction ends in another one (the section state crossed a switching boundary
+        between the points), the correction is done again from that mode. Returns the
+        point, its mode and its Jacobian.
+        """
+        Xp = X.copy()
+        self.why = ""
+        tries = ([(mode, True)] if A is not None else []) + [(mode, False)]
+        tried = set()
+        while tries:
+            mode, chord = tries.pop(0)
+            tried.add((_key(mode), chord))
+            Xc = Xp.copy()
+            first_end = None
+            try:
+                G = np.vstack([A, T]) if chord else None
+                for it in range(2 * self.max_corrections if chord else self.max_corrections):
+                    r, mode_end = self.residual(Xc, mode)
+                    first_end = mode_end if first_end is None else first_end
+                    res = float(np.max(np.abs(r)))
+                    if res <= self.tol:
+                        break
+                    if not chord:
+                        G = np.vstack([self.jacobian(Xc, mode), T])
+                    Xc = Xc + np.linalg.solve(G, -np.append(r, np.dot(T, Xc - Xp)))
+                    if not (np.all(np.isfinite(Xc)) and np.linalg.norm(Xc - Xp) < 1.0):
+                        raise FlowError("the correction diverged (moved by more than the orbit's excursion)")
+                else:
+                    raise FlowError(f"no convergence in {it + 1} corrections (residual {res:.2g})")
+            except (FlowError, np.linalg.LinAlgError, ValueError) as e:   # ValueError: a field out of its range
+                self.why = str(e)
+                for other in [first_end, *self.other_modes(mode)]:
+                    if other is not None and (_key(other), False) not in tried and \
+                            all(_key(other) != _key(m) for m, _ in tries):
+                        tries.append((_copy(other), False))
+                continue
+            self.iterations = it
+            if _same(mode_end, mode):
+                return Xc, mode, self.jacobian(Xc, mode)
+            if (_key(mode_end), False) not in tried:
+                tries.append((_copy(mode_end), False))
+            self.why = "the orbit's mode at the section keeps changing (it switches exactly there)"
+        return None, mode, None
+
+    def point(self, X, mode, A):
+        """The branch point's record from its scaled unknowns and Jacobian."""
+        n = self.n
+        J = A[:, :n] * self.scale[:, None] / self.scale[None, :] + np.eye(n)
+        mu = np.linalg.eigvals(J)
+        mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+        lam = X[-1] * self.span
+        P = self.fam.map_at(lam)
+        y = X[:-1] * self.scale
+        t, Y = _orbit_samples(P.integrator, y, mode, self.fam.periods)
+        amp = 0.5 * (Y.max(axis=0) - Y.min(axis=0))
+        c = np.fft.rfft(Y[:-1], axis=0)[self.fam.periods] * 2.0 / (Y.shape[0] - 1)
+        return {"param": lam, "state": y, "mu": mu, "stable": bool(np.max(np.abs(mu)) < 1.0), "amp": amp,
+                "h1": c, "unstable": _unstable_count(mu), "X": X.copy(), "mode": _copy(mode), "A": A, "Y": Y}
+
+    def detect(self, a, b, Xa, Ta, mode, index, locate_tol):
+        """The bifurcations between consecutive points ``a`` and ``b``, located by bisection."""
+        if a["unstable"] == b["unstable"]:
+            return []
+        lo, hi = 0.0, float(np.dot(Ta, b["X"] - Xa))
+        best = b
+        while hi - lo > locate_tol:
+            mid = 0.5 * (lo + hi)
+            Xm, mm, Am = self.correct(Xa + mid * Ta, Ta, mode, a["A"])
+            if Xm is None:
+                break
+            pm = self.point(Xm, mm, Am)
+            if pm["unstable"] == a["unstable"]:
+                lo = mid
+            else:
+                hi, best = mid, pm
+        mu = best["mu"][np.argmin(np.abs(np.abs(best["mu"]) - 1.0))]
+        if abs(mu.imag) > 1e-6 * abs(mu):
+            kind = "neimark-sacker"
+        else:
+            kind = "period-doubling" if mu.real < 0 else "fold"
+        return [SpecialPoint(kind=kind, param=best["param"], state=best["state"], multiplier=complex(mu),
+                             index=index)]
+
+
+def _key(mode):
+    """A hashable form of a mode (an int, or the per-contact kernel's array)."""
+    return tuple(np.atleast_1d(mode).tolist())
+
+
+def _unstable_count(mu) -> int:
+    return int(np.sum(np.abs(mu) > 1.0))
+

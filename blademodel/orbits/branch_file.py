@@ -1,0 +1,87 @@
+"""A continued branch in a NetCDF file (one point per record), and back."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import netCDF4
+import numpy as np
+
+from .. import __version__
+from .arclength import Branch, SpecialPoint
+
+
+def save_branch(branch: Branch, path, config=None) -> None:
+    """Write ``branch`` to the NetCDF file ``path`` (written whole, then moved into place).
+
+    Variables: the field's value per ``point`` (a coordinate), the section state,
+    amplitudes and first harmonics (magnitude and phase) per ``point`` and ``state``
+    (DOF names as a string coordinate), the multipliers (real and imaginary parts)
+    per ``point`` and ``multiplier``, ``stable``, and the special points (kind,
+    value, multiplier) along ``special``. Units and long names are attributes; the
+    config (if given) is stored as JSON in the global attribute ``config``.
+    """
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    k, n = branch.states.shape
+    with netCDF4.Dataset(tmp, "w") as ds:
+        ds.title = f"periodic orbits continued in {branch.field}"
+        ds.blademodel_version = __version__
+        ds.field = branch.field
+        ds.periods = branch.periods
+        ds.message = branch.message
+        if config is not None:
+            ds.config = json.dumps(config.model_dump(mode="json"))
+        ds.createDimension("point", k)
+        ds.createDimension("state", n)
+        ds.createDimension("multiplier", n)
+        ds.createDimension("special", len(branch.special))
+        v = ds.createVariable("point", "i8", ("point",))
+        v[:] = np.arange(k)
+        v = ds.createVariable("state", str, ("state",))
+        for i, s in enumerate(branch.state_names):
+            v[i] = s
+        v = ds.createVariable(branch.field, "f8", ("point",))
+        v[:] = branch.params
+        v.long_name = f"continued field {branch.field}"
+        for name, data, long in (("section_state", branch.states, "state at t = 0 (SI units)"),
+                                 ("amplitude", branch.amplitudes, "half the peak-to-peak excursion over the orbit"),
+                                 ("harmonic1_abs", np.abs(branch.harmonics), "first-harmonic amplitude"),
+                                 ("harmonic1_phase", np.angle(branch.harmonics), "first-harmonic phase, rad")):
+            v = ds.createVariable(name, "f8", ("point", "state"))
+            v[:] = data
+            v.long_name = long
+        for name, data in (("multiplier_re", branch.multipliers.real), ("multiplier_im", branch.multipliers.imag)):
+            v = ds.createVariable(name, "f8", ("point", "multiplier"))
+            v[:] = data
+            v.long_name = "Floquet multipliers, largest modulus first"
+        v = ds.createVariable("stable", "i1", ("point",))
+        v[:] = branch.stable.astype(np.int8)
+        v.long_name = "1: every multiplier inside the unit circle"
+        v = ds.createVariable("special_kind", str, ("special",))
+        for i, p in enumerate(branch.special):
+            v[i] = p.kind
+        for name, data in (("special_" + branch.field, [p.param for p in branch.special]),
+                           ("special_multiplier_re", [p.multiplier.real for p in branch.special]),
+                           ("special_multiplier_im", [p.multiplier.imag for p in branch.special]),
+                           ("special_index", [p.index for p in branch.special])):
+            v = ds.createVariable(name, "f8" if "index" not in name else "i8", ("special",))
+            v[:] = np.asarray(data)
+    tmp.replace(path)
+
+
+def load_branch(path) -> Branch:
+    """The branch of a file written by :func:`save_branch` (special points without their states)."""
+    with netCDF4.Dataset(path) as ds:
+        name = ds.field
+        mu = ds["multiplier_re"][:].data + 1j * ds["multiplier_im"][:].data
+        special = [SpecialPoint(kind=str(ds["special_kind"][i]), param=float(ds["special_" + name][i]),
+                                state=np.empty(0),
+                                multiplier=complex(ds["special_multiplier_re"][i], ds["special_multiplier_im"][i]),
+                                index=int(ds["special_index"][i])) for i in range(len(ds.dimensions["special"]))]
+        return Branch(field=name, periods=int(ds.periods), params=ds[name][:].data.copy(),
+                      states=ds["section_state"][:].data.copy(), multipliers=mu,
+                      stable=ds["stable"][:].data.astype(bool), amplitudes=ds["amplitude"][:].data.copy(),
+                      harmonics=ds["harmonic1_abs"][:].data * np.exp(1j * ds["harmonic1_phase"][:].data),
+                      special=special, state_names=[str(s) for s in ds["state"][:]], message=ds.message)
