@@ -8,19 +8,13 @@ from blademodel.config import BladePair
 from blademodel.numeric import simulate
 from blademodel.numeric.kernels import make_integrator
 from blademodel.orbits import PeriodMap, continuation, find_periodic_orbit
+from linear_reference import forced_response
 
 
 def _exact_first_harmonic(cfg, omega, state="x1"):
-    """``Y`` of the contact-free pair's steady state ``Re(Y exp(i omega t))``, ``(i omega - A) Y = b_c - i b_s``."""
+    """The exact first harmonic of ``state`` of the contact-free model at ``omega``."""
     ig = make_integrator(type(cfg).model_validate({**cfg.model_dump(), "omega": omega}).build())
-    n, mode = ig.n_physical, ig.mode_of(np.zeros(ig.n_state))
-    A = ig.module.jacobian(mode, ig.p_raw)[:n, :n]
-    out = np.empty(ig.n_state)
-    ig.module.rhs(mode, 0.0, np.zeros(ig.n_state), ig.p, out)
-    b_c = out[:n].copy()
-    ig.module.rhs(mode, ig.period / 4, np.zeros(ig.n_state), ig.p, out)
-    Y = np.linalg.solve(1j * omega * np.eye(n) - A, b_c - 1j * out[:n])
-    return Y[list(ig.meta["state"]).index(state)]
+    return forced_response(ig)[list(ig.meta["state"]).index(state)]
 
 
 def test_the_forced_response_of_a_contact_free_pair_is_the_exact_linear_frf():

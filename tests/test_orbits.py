@@ -9,17 +9,7 @@ from blademodel.config import BladedDisk, BladePair
 from blademodel.numeric import simulate
 from blademodel.numeric.kernels import make_integrator
 from blademodel.orbits import PeriodMap, ShootingError, find_periodic_orbit
-
-
-def _linear_parts(ig):
-    """``A`` and the forcing ``b_c cos(w t) + b_s sin(w t)`` of the open (contact-free) mode of the product kernel."""
-    n, mode = ig.n_physical, ig.mode_of(np.zeros(ig.n_state))
-    A = ig.module.jacobian(mode, ig.p_raw)[:n, :n]
-    out = np.empty(ig.n_state)
-    ig.module.rhs(mode, 0.0, np.zeros(ig.n_state), ig.p, out)
-    b_c = out[:n].copy()
-    ig.module.rhs(mode, ig.period / 4, np.zeros(ig.n_state), ig.p, out)
-    return A, b_c, out[:n].copy()
+from linear_reference import forced_response, linear_parts
 
 
 def test_a_contact_free_orbit_is_the_exact_forced_response():
@@ -28,9 +18,8 @@ def test_a_contact_free_orbit_is_the_exact_forced_response():
     m = BladePair(gap=1.0).build()
     ig = make_integrator(m, steps_per_period=1000, method="rk8")
     o = find_periodic_orbit(m, integrator=ig, transient=0)
-    A, b_c, b_s = _linear_parts(ig)
-    w = 2 * np.pi / ig.period
-    Y = np.linalg.solve(1j * w * np.eye(A.shape[0]) - A, b_c - 1j * b_s)
+    A = linear_parts(ig)[0]
+    Y = forced_response(ig)
     assert np.max(np.abs(o.state - Y.real) / o.scale) < 1e-8
     for i, name in enumerate(o.state_names):
         assert abs(o.harmonic(name) - Y[i]) < 1e-8 * np.max(np.abs(Y[i % 4::4]))
