@@ -25,6 +25,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..numeric.contract import C_EVENTS, N_COUNTERS
 from .period_map import FlowError, PeriodMap, _copy
 from .shooting import _n_coordinates, _orbit_samples, _same, _state_scale, find_periodic_orbit
 
@@ -36,13 +37,15 @@ class SpecialPoint:
     Attributes
     ----------
     kind : str
-        ``"fold"``, ``"period-doubling"`` or ``"neimark-sacker"``.
+        ``"fold"``, ``"period-doubling"``, ``"neimark-sacker"`` or ``"grazing"`` (the number
+        of events per orbit changes: a guard of the orbit touches zero).
     param : float
         The field's value there (located to ``locate_tol`` of the range).
     state : ndarray
         The orbit's section state there.
     multiplier : complex
-        The multiplier that crossed the unit circle, at the located point.
+        The multiplier that crossed the unit circle, at the located point (at a
+        grazing point, the largest one).
     index : int
         The branch point after which it lies.
     """
@@ -73,6 +76,8 @@ class Branch:
         Half the peak-to-peak excursion of each state over the orbit.
     harmonics : ndarray, shape (points, states), complex
         First harmonic (of the excitation) of each state.
+    events : ndarray of int
+        Events per orbit (over ``periods`` excitation periods).
     special : list of SpecialPoint
     state_names : list of str
     message : str
@@ -87,6 +92,7 @@ class Branch:
     stable: np.ndarray
     amplitudes: np.ndarray
     harmonics: np.ndarray
+    events: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     special: list = field(default_factory=list)
     state_names: list = field(default_factory=list)
     message: str = ""
@@ -97,18 +103,26 @@ class Branch:
 
 
 class _Family:
-    """Period maps of the config at any value of the field (integrators made on demand, a few kept)."""
+    """Period maps of the config at any value of the field (integrators made on demand, a few kept).
 
-    def __init__(self, config, name: str, periods: int, settings: dict):
-        if name not in type(config).model_fields:
-            raise ValueError(f"{type(config).__name__} has no field {name!r} to continue in "
-                             f"(fields: {', '.join(type(config).model_fields)})")
+    The field is set as ``--set`` does (:func:`~blademodel.config.apply_overrides`): a
+    top-level field, a dotted path (``contacts.0.gap``), or in the components format
+    a declared parameter by its bare name (``omega``).
+    """
+
+    def __init__(self, config, name: str, periods: int, settings: dict, start: float):
         self.config, self.name, self.periods, self.settings = config, name, periods, settings
-        self.first = getattr(config, name)
+        self.first = float(start)
+        try:
+            self.config_at(start)
+        except ValueError as e:
+            raise ValueError(f"{type(config).__name__} has no field {name!r} to continue in, or {start!r} is not "
+                             f"a value it takes: {e}") from None
         self._cache: dict = {}
 
     def config_at(self, value: float):
-        return type(self.config).model_validate({**self.config.model_dump(), self.name: float(value)})
+        from ..config import apply_overrides
+        return apply_overrides(self.config, {self.name: float(value)}, source="continuation")
 
     def map_at(self, value: float) -> PeriodMap:
         key = float(value)
@@ -164,7 +178,7 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
     Branch
     """
     settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
-    fam = _Family(config, name, periods, settings)
+    fam = _Family(config, name, periods, settings, start)
     span = abs(stop - start)
     if not span > 0:
         raise ValueError(f"start and stop must differ, got {start!r} and {stop!r}")
@@ -238,6 +252,7 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
                   states=np.array([p["state"] for p in pts]), multipliers=np.array([p["mu"] for p in pts]),
                   stable=np.array([p["stable"] for p in pts], dtype=bool),
                   amplitudes=np.array([p["amp"] for p in pts]), harmonics=np.array([p["h1"] for p in pts]),
+                  events=np.array([p["events"] for p in pts], dtype=np.int64),
                   special=special, state_names=list(ig.meta["state"][:n]),
                   message=message if k < max_points else f"stopped after max_points = {max_points} points")
 
@@ -382,35 +397,57 @@ class _Context:
         lam = X[-1] * self.span
         P = self.fam.map_at(lam)
         y = X[:-1] * self.scale
-        t, Y = _orbit_samples(P.integrator, y, mode, self.fam.periods)
+        counters = np.zeros(N_COUNTERS, dtype=np.int64)
+        t, Y = _orbit_samples(P.integrator, y, mode, self.fam.periods, counters)
         amp = 0.5 * (Y.max(axis=0) - Y.min(axis=0))
         c = np.fft.rfft(Y[:-1], axis=0)[self.fam.periods] * 2.0 / (Y.shape[0] - 1)
         return {"param": lam, "state": y, "mu": mu, "stable": bool(np.max(np.abs(mu)) < 1.0), "amp": amp,
-                "h1": c, "unstable": _unstable_count(mu), "X": X.copy(), "mode": _copy(mode), "A": A, "Y": Y}
+                "h1": c, "unstable": _unstable_count(mu), "X": X.copy(), "mode": _copy(mode), "A": A, "Y": Y,
+                "events": int(counters[C_EVENTS])}
 
     def detect(self, a, b, Xa, Ta, mode, index, locate_tol):
-        """The bifurcations between consecutive points ``a`` and ``b``, located by bisection."""
-        if a["unstable"] == b["unstable"]:
-            return []
+        """The bifurcations between consecutive points ``a`` and ``b``, each located by bisection.
+
+        A change in the number of multipliers outside the unit circle (fold, period
+        doubling, Neimark-Sacker), and a change in the number of events per orbit: a
+        guard of the orbit touches zero there (a contact that grazes, a slip that comes
+        to rest: **grazing**, including the end of continuous sliding).
+        """
+        found = []
+        for what in ("unstable", "events"):
+            if a[what] == b[what]:
+                continue
+            best = self._bisect(a, b, Xa, Ta, mode, what, locate_tol)
+            if what == "events":
+                found.append(SpecialPoint(kind="grazing", param=best["param"], state=best["state"],
+                                          multiplier=complex(best["mu"][0]), index=index))
+                continue
+            mu = best["mu"][np.argmin(np.abs(np.abs(best["mu"]) - 1.0))]
+            if abs(mu.imag) > 1e-6 * abs(mu):
+                kind = "neimark-sacker"
+            else:
+                kind = "period-doubling" if mu.real < 0 else "fold"
+            found.append(SpecialPoint(kind=kind, param=best["param"], state=best["state"], multiplier=complex(mu),
+                                      index=index))
+        return found
+
+    def _bisect(self, a, b, Xa, Ta, mode, what, locate_tol):
+        """The first point past the change of ``what`` from ``a`` to ``b``, to ``locate_tol`` of arclength."""
         lo, hi = 0.0, float(np.dot(Ta, b["X"] - Xa))
         best = b
         while hi - lo > locate_tol:
             mid = 0.5 * (lo + hi)
             Xm, mm, Am = self.correct(Xa + mid * Ta, Ta, mode, a["A"])
             if Xm is None:
+                Xm, mm, Am = self.correct_at_value(Xa + mid * Ta, mode)
+            if Xm is None:
                 break
             pm = self.point(Xm, mm, Am)
-            if pm["unstable"] == a["unstable"]:
+            if pm[what] == a[what]:
                 lo = mid
             else:
                 hi, best = mid, pm
-        mu = best["mu"][np.argmin(np.abs(np.abs(best["mu"]) - 1.0))]
-        if abs(mu.imag) > 1e-6 * abs(mu):
-            kind = "neimark-sacker"
-        else:
-            kind = "period-doubling" if mu.real < 0 else "fold"
-        return [SpecialPoint(kind=kind, param=best["param"], state=best["state"], multiplier=complex(mu),
-                             index=index)]
+        return best
 
 
 def _key(mode):

@@ -56,6 +56,9 @@ def save_branch(branch: Branch, path, config=None) -> None:
             v = ds.createVariable(name, "f8", ("point", "multiplier"))
             v[:] = data
             v.long_name = "Floquet multipliers, largest modulus first"
+        v = ds.createVariable("events", "i8", ("point",))
+        v[:] = branch.events
+        v.long_name = "events per orbit"
         v = ds.createVariable("stable", "i1", ("point",))
         v[:] = branch.stable.astype(np.int8)
         v.long_name = "1: every multiplier inside the unit circle"
@@ -83,5 +86,6 @@ def load_branch(path) -> Branch:
         return Branch(field=name, periods=int(ds.periods), params=ds[name][:].data.copy(),
                       states=ds["section_state"][:].data.copy(), multipliers=mu,
                       stable=ds["stable"][:].data.astype(bool), amplitudes=ds["amplitude"][:].data.copy(),
+                      events=ds["events"][:].data.copy(),
                       harmonics=ds["harmonic1_abs"][:].data * np.exp(1j * ds["harmonic1_phase"][:].data),
                       special=special, state_names=[str(s) for s in ds["state"][:]], message=ds.message)

@@ -236,14 +236,19 @@ def _n_coordinates(ig) -> int:
     return sum(1 for s in names if ("v" + s) in names)
 
 
-def _orbit_samples(ig, y, mode, periods):
-    """The trajectory from ``(y, mode)`` at every step over ``periods`` periods: ``t`` and physical states."""
+def _orbit_samples(ig, y, mode, periods, counters=None):
+    """The trajectory from ``(y, mode)`` at every step over ``periods`` periods: ``t`` and physical states.
+
+    ``counters`` (``contract.N_COUNTERS`` int64), if given, accumulates the run's counters.
+    """
+    from .period_map import settle
     n = ig.n_physical
     full = np.zeros(ig.n_state)
     full[:n] = y
     m = periods * ig.steps_per_period + 1
     rec = ig.record_buffer(m)
-    status, _, t = ig.advance(full, _copy(mode), 0, periods, n_transient=0, record=rec)
+    mode = settle(ig, full, _copy(mode))
+    status, _, t = ig.advance(full, mode, 0, periods, n_transient=0, record=rec, counters=counters)
     if status != 0:
         raise FlowError(f"the integration stopped at t = {t:.6g} s with status {status}")
     return rec[0].copy(), rec[1][:, :n].copy()

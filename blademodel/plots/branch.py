@@ -7,7 +7,7 @@ from matplotlib.figure import Figure
 
 #: Marker of each kind of special point.
 MARKERS = {"fold": ("s", "fold"), "period-doubling": ("D", "period doubling"),
-           "neimark-sacker": ("^", "Neimark-Sacker")}
+           "neimark-sacker": ("^", "Neimark-Sacker"), "grazing": ("o", "grazing")}
 
 
 def _between(value, x, y, k):
