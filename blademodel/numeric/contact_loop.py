@@ -464,7 +464,7 @@ def guard_rates(y, dy, cm, I, R, WI, WF, D, with_stick):
 
     The penetration's rate is known in every mode; a law guard's where the law's
     generated ``law_guard_rates`` knows it; a guard on a rigid stick force's only
-    ``with_stick`` (:func:`stick_force_rates`, about half an evaluation of the forces)
+    ``with_stick`` (:func:`stick_force_rates`, one more pass over the forces and a stick solve)
     and not in a closed ring of sticking contacts (whose forces are not determined by
     the motion); NaN elsewhere.
     """

@@ -112,7 +112,6 @@ class _Family:
 
     def __init__(self, config, name: str, periods: int, settings: dict, start: float):
         self.config, self.name, self.periods, self.settings = config, name, periods, settings
-        self.first = float(start)
         try:
             self.config_at(start)
         except ValueError as e:
@@ -247,14 +246,13 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
             break
     else:
         message = f"stopped after max_points = {max_points} points at {name} = {X[-1] * span:.6g}"
-    k = len(pts)
     return Branch(field=name, periods=periods, params=np.array([p["param"] for p in pts]),
                   states=np.array([p["state"] for p in pts]), multipliers=np.array([p["mu"] for p in pts]),
                   stable=np.array([p["stable"] for p in pts], dtype=bool),
                   amplitudes=np.array([p["amp"] for p in pts]), harmonics=np.array([p["h1"] for p in pts]),
                   events=np.array([p["events"] for p in pts], dtype=np.int64),
                   special=special, state_names=list(ig.meta["state"][:n]),
-                  message=message if k < max_points else f"stopped after max_points = {max_points} points")
+                  message=message)
 
 
 def _tangent(A, previous):
@@ -305,18 +303,6 @@ class _Context:
         A[:, n] *= r
         self.scale = scale.copy()
         return X, T, A
-
-    def other_modes(self, mode) -> list:
-        """Start modes to try when the correction fails in ``mode``: every other mode of the product kernel.
-
-        Where the section state crosses a switching boundary between two points (a
-        stick-slip transition at ``t = 0``), starting in the old mode with its guard
-        already past zero follows the wrong flow; one of the other modes is the orbit's.
-        (The per-contact kernel's modes, one per contact, are not enumerated.)
-        """
-        if isinstance(mode, np.ndarray):
-            return []
-        return [m for m in range(len(self.fam.map_at(self.fam.first).integrator.meta["modes"])) if m != mode]
 
     def residual(self, X, mode):
         """``(P(y) - y) / scale`` and the mode the map ends in."""
@@ -375,10 +361,9 @@ class _Context:
                     raise FlowError(f"no convergence in {it + 1} corrections (residual {res:.2g})")
             except (FlowError, np.linalg.LinAlgError, ValueError) as e:   # ValueError: a field out of its range
                 self.why = str(e)
-                for other in [first_end, *self.other_modes(mode)]:
-                    if other is not None and (_key(other), False) not in tried and \
-                            all(_key(other) != _key(m) for m, _ in tries):
-                        tries.append((_copy(other), False))
+                if first_end is not None and (_key(first_end), False) not in tried and \
+                        all(_key(first_end) != _key(m) for m, _ in tries):
+                    tries.append((_copy(first_end), False))
                 continue
             self.iterations = it
             if _same(mode_end, mode):
