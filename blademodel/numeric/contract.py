@@ -14,10 +14,16 @@ STATUS_NONFINITE = 1
 STATUS_EVENT_STORM = 2
 #: The friction complementarity problem of an event was not resolved within its pivot cap.
 STATUS_FRICTION_UNRESOLVED = 3
+#: A tangent replay (:mod:`.tangent_loop`) took another transition than the kernel's event log.
+STATUS_REPLAY_MISMATCH = 4
+#: A tangent replay met an event whose guard has a zero rate along the flow (no saltation matrix).
+STATUS_GRAZING_EVENT = 5
 
 #: Human-readable status names, by code.
 STATUS_NAMES = {STATUS_OK: "done", STATUS_NONFINITE: "non-finite state", STATUS_EVENT_STORM: "event storm",
-                STATUS_FRICTION_UNRESOLVED: "friction problem unresolved"}
+                STATUS_FRICTION_UNRESOLVED: "friction problem unresolved",
+                STATUS_REPLAY_MISMATCH: "tangent replay left the logged events",
+                STATUS_GRAZING_EVENT: "grazing event (no saltation matrix)"}
 
 # Integer counters: one int64 array of N_COUNTERS, accumulated across calls of ``integrate``.
 C_STEPS = 0           #: completed RK4 steps

@@ -7,9 +7,11 @@ pseudo-arclength continuation: a step ``ds`` along the tangent, then Newton's me
 the orbit condition plus the arclength condition, so the branch is followed around
 folds. Both the state and the field are scaled (each state by its excursion on the
 first orbit, the field by the continuation range), the Jacobians are central
-differences of the period map (:class:`~blademodel.orbits.period_map.PeriodMap`; the
-field's column from maps built at ``lambda +- delta``), and the step grows after easy
-corrections and is halved after hard or failed ones.
+the tangent of the period map (:class:`~blademodel.orbits.period_map.PeriodMap`:
+variational equations with saltation matrices, the field's column along the raw
+parameters' direction ``d p / d lambda``) where the kernel has one, else its central
+differences (the field's column from maps built at ``lambda +- delta``), and the step
+grows after easy corrections and is halved after hard or failed ones.
 
 Each point carries its Floquet multipliers. A change in the number of multipliers
 outside the unit circle between two points is a bifurcation, located by bisection on
@@ -122,6 +124,20 @@ class _Family:
     def config_at(self, value: float):
         from ..config import apply_overrides
         return apply_overrides(self.config, {self.name: float(value)}, source="continuation")
+
+    def parameter_direction(self, value: float, delta: float, names: list) -> tuple[np.ndarray, float]:
+        """``d p / d lambda`` over the raw parameters ``names`` and ``d T / d lambda`` at ``value``.
+
+        Central differences of the built models' parameter values and excitation
+        periods (no integration): a field enters the parameters through the config's
+        own formulas, which are smooth (most are linear).
+        """
+        from ..numeric.integrator import excitation_period
+        out = []
+        for v in (value + delta, value - delta):
+            model = self.config_at(v).build()
+            out.append((np.array([model.parameters[k] for k in names], dtype=float), excitation_period(model)))
+        return (out[0][0] - out[1][0]) / (2 * delta), (out[0][1] - out[1][1]) / (2 * delta)
 
     def map_at(self, value: float) -> PeriodMap:
         key = float(value)
@@ -312,14 +328,22 @@ class _Context:
         return (Py - y) / self.scale, mode_end
 
     def jacobian(self, X, mode):
-        """``d residual / dX`` (``n x (n + 1)``), central differences."""
+        """``d residual / dX`` (``n x (n + 1)``): the tangent of the flow where it exists, else central differences."""
         n, d = self.n, self.rel_step
-        P = self.fam.map_at(X[-1] * self.span)
-        y = X[:-1] * self.scale
-        J = P.jacobian(y, mode, self.scale, d)
-        A = np.empty((n, n + 1))
-        A[:, :n] = (J - np.eye(n)) * self.scale[None, :] / self.scale[:, None]
         lam = X[-1] * self.span
+        P = self.fam.map_at(lam)
+        y = X[:-1] * self.scale
+        A = np.empty((n, n + 1))
+        if P.exact:
+            ig = P.integrator
+            dp, dT = self.fam.parameter_direction(lam, d * self.span, ig.meta["params"])
+            s = P._tangent(y, mode, dp, dT)
+            if s is not None:
+                A[:, :n] = (s.monodromy - np.eye(n)) * self.scale[None, :] / self.scale[:, None]
+                A[:, n] = s.parameter * self.span / self.scale
+                return A
+        J = P.differences(y, mode, self.scale, d)
+        A[:, :n] = (J - np.eye(n)) * self.scale[None, :] / self.scale[:, None]
         Pp, Pm = self.fam.map_at(lam + d * self.span), self.fam.map_at(lam - d * self.span)
         A[:, n] = (Pp(y, _copy(mode))[0] - Pm(y, _copy(mode))[0]) / self.scale / (2 * d)
         return A

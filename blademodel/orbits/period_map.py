@@ -4,6 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
+#: How a :class:`PeriodMap` differentiates: ``"auto"`` (the tangent where the kernel has one, else
+#: differences), ``"tangent"`` (variational equations and saltation matrices, or an error) or
+#: ``"differences"`` (central differences of the map).
+JACOBIAN_METHODS = ("auto", "tangent", "differences")
+
 
 class FlowError(RuntimeError):
     """The integration behind the period map stopped early (status and message of the kernel)."""
@@ -22,15 +27,65 @@ class PeriodMap:
         From :func:`blademodel.numeric.kernels.make_integrator` (either kernel).
     periods : int
         ``n``: the map covers ``n T``.
+    jacobian : {"auto", "tangent", "differences"}
+        How :meth:`jacobian` differentiates. The tangent (:mod:`blademodel.numeric.tangent`:
+        the exact derivative of the kernel's discrete flow, saltation matrices at the
+        events) exists for the product-mode kernel; ``"auto"`` takes it there and falls
+        back to central differences elsewhere, or where the tangent fails (an event
+        with a zero guard rate).
     """
 
-    def __init__(self, integrator, periods: int = 1):
+    def __init__(self, integrator, periods: int = 1, jacobian: str = "auto"):
         if int(periods) < 1:
             raise ValueError(f"periods must be a whole number >= 1, got {periods!r}")
+        if jacobian not in JACOBIAN_METHODS:
+            raise ValueError(f"jacobian = {jacobian!r} must be one of {', '.join(JACOBIAN_METHODS)}")
+        if jacobian == "tangent" and getattr(integrator, "kernel", "") != "product":
+            raise ValueError("jacobian = 'tangent' needs the product-mode kernel (models with at most one contact)")
         self.integrator = integrator
         self.periods = int(periods)
         self.n = integrator.n_physical
         self.evaluations = 0
+        self.method = jacobian
+        self.exact = jacobian != "differences" and getattr(integrator, "kernel", "") == "product"
+
+    def derivatives(self, y, mode, dp=None, dperiod: float = 0.0):
+        """``P(y)``, its mode, ``dP/dy`` and (with ``dp``) ``dP/dlambda`` by the tangent of the flow.
+
+        Parameters
+        ----------
+        y : array_like
+            Physical start state.
+        mode : int
+        dp : array_like, optional
+            The direction ``d p / d lambda`` in the raw parameters.
+        dperiod : float
+            ``d T / d lambda``.
+
+        Returns
+        -------
+        FlowSensitivity
+            With ``state`` the map's value (:class:`blademodel.numeric.tangent.FlowSensitivity`).
+
+        Raises
+        ------
+        SensitivityError
+            Where the tangent cannot follow the flow.
+        """
+        from ..numeric.tangent import flow_sensitivity, settle_jacobian
+        ig = self.integrator
+        full = np.zeros(ig.n_state)
+        full[:self.n] = y
+        fired: list = []
+        mode = settle(ig, full, mode, fired)
+        s = flow_sensitivity(ig, full[:self.n], mode, self.periods, dp=dp, dperiod=dperiod)
+        self.evaluations += 1
+        if fired:
+            D, dl = settle_jacobian(ig, fired, dp)
+            if s.parameter is not None:
+                s.parameter = s.parameter + s.monodromy @ dl
+            s.monodromy = s.monodromy @ D
+        return s
 
     def __call__(self, y, mode):
         """The state and mode ``n T`` after ``(y, mode)``."""
@@ -44,14 +99,43 @@ class PeriodMap:
             raise FlowError(f"the integration stopped at t = {t:.6g} s with status {status}")
         return full[:self.n].copy(), mode_end
 
-    def jacobian(self, y, mode, scale, rel_step: float = 1e-6) -> np.ndarray:
-        """``dP/dy`` at ``(y, mode)`` by central differences, column ``i`` with step ``rel_step * scale[i]``.
+    def linearize(self, y, mode, scale, rel_step: float = 1e-6):
+        """``P(y)``, the mode it ends in and ``dP/dy``: one tangent run, or the map and its differences."""
+        if self.exact:
+            s = self._tangent(y, mode)
+            if s is not None:
+                return s.state, s.mode, s.monodromy
+        Py, mode_end = self(y, _copy(mode))
+        return Py, mode_end, self.jacobian(y, mode, scale, rel_step)
 
-        Every perturbed start keeps ``mode``: the map is differentiated along the
-        event sequence of ``(y, mode)``, which is what its eigenvalues describe as
-        long as no event of the orbit is grazing (a perturbation of ``rel_step``
-        would then change the sequence).
+    def _tangent(self, y, mode, dp=None, dperiod: float = 0.0):
+        """:meth:`derivatives`, or None where the tangent fails and differences may stand in."""
+        from ..numeric.tangent import SensitivityError
+        try:
+            return self.derivatives(y, _copy(mode), dp, dperiod)
+        except SensitivityError as e:
+            if self.method == "tangent":
+                raise FlowError(str(e)) from None
+            return None
+
+    def jacobian(self, y, mode, scale, rel_step: float = 1e-6) -> np.ndarray:
+        """``dP/dy`` at ``(y, mode)``: the tangent of the flow, or central differences.
+
+        With the tangent (``exact``), the derivative of the kernel's discrete flow along
+        its events. Otherwise column ``i`` is a central difference with step
+        ``rel_step * scale[i]``; every perturbed start keeps ``mode``, so the map is
+        differentiated along the event sequence of ``(y, mode)``, which is what its
+        eigenvalues describe as long as no event of the orbit is grazing (a
+        perturbation of ``rel_step`` would then change the sequence).
         """
+        if self.exact:
+            s = self._tangent(y, mode)
+            if s is not None:
+                return s.monodromy
+        return self.differences(y, mode, scale, rel_step)
+
+    def differences(self, y, mode, scale, rel_step: float = 1e-6) -> np.ndarray:
+        """``dP/dy`` by central differences, column ``i`` with step ``rel_step * scale[i]`` (see :meth:`jacobian`)."""
         y = np.asarray(y, dtype=float)
         J = np.empty((self.n, self.n))
         for i in range(self.n):
@@ -63,7 +147,7 @@ class PeriodMap:
         return J
 
 
-def settle(integrator, y, mode):
+def settle(integrator, y, mode, fired: list | None = None):
     """The mode ``y`` starts in: ``mode`` with every guard already past zero at ``t = 0`` fired.
 
     The kernels fire a guard when it *crosses* zero within a step; a start state that
@@ -72,7 +156,8 @@ def settle(integrator, y, mode):
     period map continuous across the boundary, which shooting and continuation cross
     when the orbit's switching time passes the section. The product-mode kernel only:
     the per-contact kernel's guard functions are not callable from Python, and there
-    the mode is taken as given. ``y`` may be reset in place (a transition's reset).
+    the mode is taken as given. ``y`` may be reset in place (a transition's reset);
+    each transition fired is appended to ``fired`` as ``(mode, guard, target, state before)``.
     """
     if isinstance(mode, np.ndarray) or not hasattr(integrator, "module"):
         return mode
@@ -85,7 +170,11 @@ def settle(integrator, y, mode):
                 if (mod.GUARD_DIR[mode, i] < 0 and g[i] < 0.0) or (mod.GUARD_DIR[mode, i] > 0 and g[i] > 0.0)]
         if not past:
             break
-        mode = int(mod.transition(mode, past[0], 0.0, y, integrator.p, tmp))
+        before = y.copy()
+        target = int(mod.transition(mode, past[0], 0.0, y, integrator.p, tmp))
+        if fired is not None:
+            fired.append((mode, past[0], target, before))
+        mode = target
     return mode
 
 

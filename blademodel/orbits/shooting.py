@@ -193,8 +193,12 @@ def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, trans
 def _newton(P, y, mode, scale, tol, max_iter, rel_step, history):
     """Newton's method on ``P(y) - y`` from ``(y, mode)``; the solution and the mode ``P`` ends in."""
     n = y.size
+    J = None
     for it in range(max_iter + 1):
-        Py, mode_end = P(y, _copy(mode))
+        if P.exact and it > 0:
+            Py, mode_end, J = P.linearize(y, mode, scale, rel_step)
+        else:
+            Py, mode_end = P(y, _copy(mode))
         r = (Py - y) / scale
         res = float(np.max(np.abs(r)))
         history.append(res)
@@ -203,7 +207,8 @@ def _newton(P, y, mode, scale, tol, max_iter, rel_step, history):
         if it == max_iter:
             raise ShootingError(f"shooting did not converge in {max_iter} Newton steps: scaled residual "
                                 f"{res:.3g} > tol = {tol:g} (history: {_show(history)})", history, y)
-        J = P.jacobian(y, mode, scale, rel_step)
+        if J is None or not P.exact:
+            J = P.jacobian(y, mode, scale, rel_step)
         Js = (J - np.eye(n)) * scale[None, :] / scale[:, None]
         step = np.linalg.lstsq(Js, -r, rcond=None)[0] * scale
         lam = 1.0

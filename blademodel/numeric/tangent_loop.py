@@ -1,0 +1,286 @@
+"""Tangent integration of the hybrid flow along a recorded event sequence (template).
+
+This file is a *template*, like :mod:`.loop`: it is pasted into a model's
+sensitivity module after the generated ``rhs``, ``transition`` (:mod:`.codegen`),
+``flow_jacobian``, ``guard_gradient`` and ``reset_jacobian``
+(:mod:`.sensitivity_codegen`), and compiled with Numba.
+
+:func:`replay_tangent` repeats a run of the product-mode kernel from the kernel's
+event log: the same steps, each event at its logged time, the same transitions.
+Along the way it carries the tangent ``V = d y / d (y0, lambda)`` of the physical
+states and ``tau = d t / d (y0, lambda)`` of the current time. It differentiates
+the kernel's *discrete* map exactly, not the flow it approximates:
+
+* a (sub)step ``y_b = Phi(t_a, y_a, t_b - t_a)`` of the Runge-Kutta method is
+  differentiated stage by stage in its start state, start time and length::
+
+      dy_b = Phi_y dy_a + Phi_t0 dt_a + Phi_h (dt_b - dt_a)   (+ Phi_p dlambda)
+
+* a step ends on the grid (``dt_b = t_b / T dT``, zero unless the period moves
+  with ``lambda``) or at an event, whose time follows from its guard,
+  ``g(t_b, y_b) = 0``::
+
+      dt_b = -(g_y (dy_b with dt_b = 0) + g_p dlambda) / (g_t + g_y Phi_h)
+
+* the transition's reset ``y+ = R(t_b, y_b)`` then gives
+  ``dy+ = R_y dy_b + R_t dt_b + R_p dlambda``.
+
+Together the event's two sub-steps and the reset make the discrete form of the
+**saltation matrix** ``R_y + (f+ - R_y f-) g_y / (g_t + g_y f-)``, to which they
+tend as the step shrinks. Further transitions the kernel takes at the same time (a
+guard already past zero there) are resets at that fixed time: ``dt`` is kept.
+
+The last column of ``V`` is the derivative along the parameter direction ``dp`` (a
+vector over the raw parameters; ``use_p`` false: none).
+"""
+
+import math  # noqa: F401  (used by the generated code)
+
+import numpy as np
+
+from blademodel.numeric.contract import STATUS_GRAZING_EVENT, STATUS_NONFINITE, STATUS_OK, STATUS_REPLAY_MISMATCH
+
+
+def tangent_step(mode, t, y, h, p, tab, V, use_p, dp, K, Y, dK, dY, Jy, Jp, Jt, out_y, out_V):
+    """One step ``h`` of the tableau ``tab`` from ``(t, y)`` in ``mode`` and its derivatives.
+
+    ``out_y`` is the step's state. ``out_V`` has ``m + 2`` columns for the ``m`` of
+    ``V``: ``Phi_y V`` (plus ``Phi_p dp`` in column ``m - 1`` with ``use_p``), then
+    ``Phi_t0`` and ``Phi_h``, the derivatives in the start time and the length. Each
+    stage ``k_i = f(t + c_i h, Y_i)``, ``Y_i = y + h sum_j a_ij k_j`` is
+    differentiated with the mode's Jacobians.
+    """
+    s = K.shape[0]
+    N = y.shape[0]
+    n = V.shape[0]
+    m = V.shape[1]
+    mm = m + 2
+    npar = Jp.shape[1]
+    for st in range(s):
+        for i in range(N):
+            Y[i] = y[i]
+        for i in range(n):
+            for c in range(m):
+                dY[i, c] = V[i, c]
+            dY[i, m] = 0.0
+            dY[i, m + 1] = 0.0
+        for q in range(st):
+            aq = tab[st * s + q]
+            if aq != 0.0:
+                a = h * aq
+                for i in range(N):
+                    Y[i] += a * K[q, i]
+                for i in range(n):
+                    for c in range(mm):
+                        dY[i, c] += a * dK[q, i, c]
+                    dY[i, m + 1] += aq * K[q, i]
+        ct = tab[s * s + s + st]
+        tc = t + ct * h
+        rhs(mode, tc, Y, p, K[st])  # noqa: F821
+        for i in range(n):
+            for k in range(n):
+                Jy[i, k] = 0.0
+            for j in range(npar):
+                Jp[i, j] = 0.0
+            Jt[i] = 0.0
+        flow_jacobian(mode, tc, Y, p, Jy, Jp, Jt)  # noqa: F821
+        for i in range(n):
+            for c in range(mm):
+                acc = 0.0
+                for k in range(n):
+                    acc += Jy[i, k] * dY[k, c]
+                dK[st, i, c] = acc
+            if use_p:
+                acc = 0.0
+                for j in range(npar):
+                    acc += Jp[i, j] * dp[j]
+                dK[st, i, m - 1] += acc
+            dK[st, i, m] += Jt[i]
+            dK[st, i, m + 1] += ct * Jt[i]
+    for i in range(N):
+        out_y[i] = y[i]
+    for i in range(n):
+        for c in range(m):
+            out_V[i, c] = V[i, c]
+        out_V[i, m] = 0.0
+        out_V[i, m + 1] = 0.0
+    for q in range(s):
+        bq = tab[s * s + q]
+        if bq != 0.0:
+            b = h * bq
+            for i in range(N):
+                out_y[i] += b * K[q, i]
+            for i in range(n):
+                for c in range(mm):
+                    out_V[i, c] += b * dK[q, i, c]
+                out_V[i, m + 1] += bq * K[q, i]
+
+
+def step_tangent(out_V, dt_a, dt_b, V):
+    """``V = Phi_y V + Phi_t0 dt_a + Phi_h (dt_b - dt_a)`` from :func:`tangent_step`'s ``out_V``."""
+    n = V.shape[0]
+    m = V.shape[1]
+    for i in range(n):
+        for c in range(m):
+            V[i, c] = out_V[i, c] + out_V[i, m] * dt_a[c] + out_V[i, m + 1] * (dt_b[c] - dt_a[c])
+
+
+def event_time_tangent(mode, gi, t, y, p, out_V, dt_a, V, use_p, dp, gy, gp, dt_b):
+    """``dt_b`` of an event of guard ``gi`` at the end of the sub-step ``out_V``, and ``V`` there.
+
+    Returns False if the guard's rate along the sub-step is zero (grazing).
+    """
+    n = V.shape[0]
+    m = V.shape[1]
+    npar = gp.shape[0]
+    for k in range(n):
+        gy[k] = 0.0
+    for j in range(npar):
+        gp[j] = 0.0
+    gt = guard_gradient(mode, gi, t, y, p, gy, gp)  # noqa: F821
+    rate = gt
+    for k in range(n):
+        rate += gy[k] * out_V[k, m + 1]
+    if rate == 0.0 or not math.isfinite(rate):
+        return False
+    for c in range(m):   # V with the end time held (absolute) first
+        dt_b[c] = 0.0
+    step_tangent(out_V, dt_a, dt_b, V)
+    for c in range(m):
+        r = 0.0
+        for k in range(n):
+            r += gy[k] * V[k, c]
+        if use_p and c == m - 1:
+            for j in range(npar):
+                r += gp[j] * dp[j]
+        dt_b[c] = -r / rate
+    for i in range(n):
+        for c in range(m):
+            V[i, c] += out_V[i, m + 1] * dt_b[c]
+    return True
+
+
+def reset_tangent(mode, gi, target, t, y, p, V, dt, use_p, dp, Ry, Rp, Rt, ytmp, W):
+    """Apply the transition of guard ``gi`` of ``mode`` to ``target`` to ``y``, and its reset's derivative to ``V``.
+
+    Returns the new mode, or ``-STATUS_REPLAY_MISMATCH``.
+    """
+    n = V.shape[0]
+    m = V.shape[1]
+    npar = Rp.shape[1]
+    for i in range(n):
+        for k in range(n):
+            Ry[i, k] = 1.0 if i == k else 0.0
+        for j in range(npar):
+            Rp[i, j] = 0.0
+        Rt[i] = 0.0
+    if not reset_jacobian(mode, gi, target, t, y, p, Ry, Rp, Rt):  # noqa: F821
+        return -STATUS_REPLAY_MISMATCH
+    new_mode = transition(mode, gi, t, y, p, ytmp)  # noqa: F821
+    if new_mode != target:
+        return -STATUS_REPLAY_MISMATCH
+    for i in range(n):
+        for c in range(m):
+            acc = Rt[i] * dt[c]
+            for k in range(n):
+                acc += Ry[i, k] * V[k, c]
+            if use_p and c == m - 1:
+                for j in range(npar):
+                    acc += Rp[i, j] * dp[j]
+            W[i, c] = acc
+    for i in range(n):
+        for c in range(m):
+            V[i, c] = W[i, c]
+    return new_mode
+
+
+def replay_tangent(y, mode, p, period, steps_per_period, start_period, end_period, tab, log_t, log_guard,
+                   log_from, log_to, n_log, V, use_p, dp, dperiod):
+    """Repeat the kernel's run over periods ``start_period .. end_period`` from its log, carrying ``V``.
+
+    ``y`` (the full state) and ``V`` (physical states by columns) are updated in
+    place. The step grid is the kernel's (``h = period / steps_per_period``); inside
+    a step, the sub-steps end at the logged event times, where the logged
+    transitions are taken. ``dperiod`` is the period's derivative along ``dp``: the
+    grid times move with it. Returns ``(status, mode, t)``.
+    """
+    N = y.shape[0]
+    n = V.shape[0]
+    m = V.shape[1]
+    npar = dp.shape[0]
+    s = int(round(math.sqrt(tab.shape[0] + 1.0))) - 1
+    K = np.empty((s, N))
+    Y = np.empty(N)
+    dK = np.empty((s, n, m + 2))
+    dY = np.empty((n, m + 2))
+    Jy = np.empty((n, n))
+    Jp = np.empty((n, npar))
+    Jt = np.empty(n)
+    y1 = np.empty(N)
+    V1 = np.empty((n, m + 2))
+    gy = np.empty(n)
+    gp = np.empty(npar)
+    Ry = np.empty((n, n))
+    Rp = np.empty((n, npar))
+    Rt = np.empty(n)
+    ytmp = np.empty(N)
+    W = np.empty((n, m))
+    dt = np.zeros(m)      # d t / d (y0, lambda) of the current time
+    dt_b = np.zeros(m)
+    h = period / steps_per_period
+    t = period * start_period
+    if use_p:
+        dt[m - 1] = t / period * dperiod
+    ie = 0
+    for per in range(start_period, end_period):
+        for j in range(steps_per_period):
+            t_end = period * per + (j + 1) * h
+            while True:
+                event = ie < n_log and log_t[ie] <= t_end
+                te = log_t[ie] if event else t_end
+                if te > t:
+                    tangent_step(mode, t, y, te - t, p, tab, V, use_p, dp, K, Y, dK, dY, Jy, Jp, Jt, y1, V1)
+                    for i in range(N):
+                        y[i] = y1[i]
+                    if event:
+                        if not event_time_tangent(mode, log_guard[ie], te, y, p, V1, dt, V, use_p, dp, gy, gp,
+                                                  dt_b):
+                            return STATUS_GRAZING_EVENT, mode, te
+                    else:
+                        for c in range(m):
+                            dt_b[c] = 0.0
+                        if use_p:
+                            dt_b[m - 1] = t_end / period * dperiod
+                        step_tangent(V1, dt, dt_b, V)
+                    for c in range(m):
+                        dt[c] = dt_b[c]
+                    t = te
+                elif not event:
+                    # an event right at the step's end: its time was the guard's, the grid
+                    # time is fixed; the state moves by f over the (zero) difference
+                    rhs(mode, t, y, p, K[0])  # noqa: F821
+                    for c in range(m):
+                        dt_b[c] = 0.0
+                    if use_p:
+                        dt_b[m - 1] = t_end / period * dperiod
+                    for i in range(n):
+                        for c in range(m):
+                            V[i, c] += K[0, i] * (dt_b[c] - dt[c])
+                    for c in range(m):
+                        dt[c] = dt_b[c]
+                if not event:
+                    t = t_end
+                    break
+                while ie < n_log and log_t[ie] == te:
+                    if log_from[ie] != mode:
+                        return STATUS_REPLAY_MISMATCH, mode, t
+                    new_mode = reset_tangent(mode, log_guard[ie], log_to[ie], t, y, p, V, dt, use_p, dp, Ry, Rp,
+                                             Rt, ytmp, W)
+                    if new_mode < 0:
+                        return -new_mode, mode, t
+                    mode = new_mode
+                    ie += 1
+            for i in range(N):
+                if not math.isfinite(y[i]):
+                    return STATUS_NONFINITE, mode, t
+    return STATUS_OK, mode, t
