@@ -7,7 +7,7 @@ from blademodel.analysis.periodicity import poincare_period
 from blademodel.config import BladePair
 from blademodel.numeric import simulate
 from blademodel.numeric.kernels import make_integrator
-from blademodel.orbits import PeriodMap, continuation, find_periodic_orbit
+from blademodel.orbits import PeriodMap, continuation, find_periodic_orbit, period_doubled_branch
 from linear_reference import forced_response
 
 
@@ -169,3 +169,34 @@ def test_den_hartogs_coulomb_oscillator():
         exact = _den_hartog(w)[0]
         X = np.max(np.abs(b.amplitudes[:, 0]))
         assert abs(y[0] - exact[0]) < 1e-8 * X and abs(y[1] - exact[1]) < 1e-8 * X * w
+
+
+def test_the_period_doubled_branch_of_the_bilinear_pair():
+    """Switched at the period doubling (gamma ~ 7.325) onto the doubled map's second branch: every point but the
+    first (the doubling itself) is a period-2 orbit that is not a period-1 one; the branch turns at a fold, and
+    past it holds stable period-2 orbits *coexisting* with the stable period-1 ones of the first branch (a
+    subcritical doubling). Independently of any Jacobian: a displaced start integrated for 300 periods returns to
+    the branch's orbit, alternating between its two section states."""
+    cfg = BladePair(friction="bilinear")
+    b1 = continuation(cfg, "gamma", 7.0, 7.6)
+    pd = b1.points("period-doubling")[0]
+    b2 = period_doubled_branch(cfg, "gamma", pd, 7.0, 7.6)
+    assert b2.periods == 2 and b2.params[0] == pd.param
+    folds = b2.points("fold")
+    assert folds and min(f.param for f in folds) < pd.param
+    ok = np.flatnonzero(b2.stable & (b2.params < pd.param - 0.01))
+    assert ok.size
+    k = ok[len(ok) // 2]
+    g, y2 = b2.params[k], b2.states[k]
+    assert b1.stable[np.argmin(np.abs(b1.params - g))]     # period 1 is stable there too
+    ig = make_integrator(type(cfg).model_validate({**cfg.model_dump(), "gamma": g}).build())
+    P = PeriodMap(ig, 1)
+    scale = np.maximum(np.abs(b2.states).max(axis=0), 1e-12)
+    half, mode_half = P(y2, ig.mode_of(np.append(y2, np.zeros(ig.n_state - y2.size))))
+    assert np.max(np.abs(half - y2) / scale) > 1e-3          # not period 1
+    full = np.zeros(ig.n_state)
+    full[:y2.size] = y2 * (1 + 1e-4)
+    status, mode, _ = ig.advance(full, ig.mode_of(full), 0, 300)
+    assert status == 0
+    back = full[:y2.size]
+    assert min(np.max(np.abs(back - y2) / scale), np.max(np.abs(back - half) / scale)) < 1e-7

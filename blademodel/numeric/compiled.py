@@ -9,6 +9,7 @@ a parameter value never regenerates or recompiles anything.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib.util
 import inspect
@@ -40,8 +41,14 @@ def _law_sources(model: Model) -> str:
 
 def law_source_hash(laws) -> str:
     """Hash of the source of the classes of ``laws`` outside the package (its own are in the code version)."""
+    return _class_source_hash(tuple(sorted({type(law) for law in laws}, key=lambda c: f"{c.__module__}.{c.__qualname__}")))
+
+
+@functools.lru_cache(maxsize=64)
+def _class_source_hash(classes: tuple) -> str:
+    """:func:`law_source_hash` of sorted classes, once per process (reading source files parses them)."""
     h = hashlib.sha256()
-    for cls in sorted({type(law) for law in laws}, key=lambda c: f"{c.__module__}.{c.__qualname__}"):
+    for cls in classes:
         for klass in cls.__mro__:
             if klass.__module__.startswith("blademodel.components.friction") or klass is object:
                 continue  # the package's own laws are in _code_version

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import math
 import warnings
 
@@ -11,7 +12,7 @@ from ..model import Model
 from .compiled import compile_model
 from .contract import N_COUNTERS
 from .methods import get_method
-from .stability import check_step, max_stable_step
+from .stability import check_step, max_stable_step, physical_eigenvalues
 
 
 
@@ -230,6 +231,8 @@ class HybridIntegrator(Integrator):
                  max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
                  check_stability: bool = True, event_location: str = "bisection", method: str = "rk4"):
         self._settings(model, steps_per_period, event_tol, max_events_per_step, period)
+        self._explicit_period = period is not None
+        self._check_stability = check_stability
         self.event_location = check_event_location(event_location)
         self.method = get_method(method)
         # classical RK4 runs fused (an empty tableau); another method steps by its tableau
@@ -240,11 +243,7 @@ class HybridIntegrator(Integrator):
         self.p = self.module.derived(self.p_raw)
         self.n_state = self.meta["n_state"]
         self.n_physical = self.n_state - (3 if energy else 0)
-        if check_stability:
-            h_max, which = max_stable_step(self.module.jacobian, len(self.meta["modes"]), self.p_raw,
-                                           self.n_physical, self.method.amplification)
-            check_step(self.period, self.steps_per_period, h_max,
-                       self.meta["modes"][which] if which >= 0 else "-", self.method.name)
+        self._check_step()
         self._g = np.empty(self.module.GUARD_DIR.shape[1] + 1)
         self._ytmp = np.empty(self.n_state)
         self._empty_rec = (np.empty(0), np.empty((0, self.n_state)), np.empty(0, dtype=np.int64))
@@ -252,6 +251,48 @@ class HybridIntegrator(Integrator):
                            np.empty(0, dtype=np.int64))
 
     kernel = "product"
+
+    def _check_step(self) -> None:
+        """Refuse a step above the method's stability limit in any mode (unless ``check_stability`` is off)."""
+        if self._check_stability:
+            h_max, which = max_stable_step(self.module.jacobian, len(self.meta["modes"]), self.p_raw,
+                                           self.n_physical, self.method.amplification)
+            check_step(self.period, self.steps_per_period, h_max,
+                       self.meta["modes"][which] if which >= 0 else "-", self.method.name)
+
+    def with_parameters(self, model: Model) -> "HybridIntegrator":
+        """This integrator for ``model``, which differs from its own in parameter values only.
+
+        Nothing is generated or compiled: the copy takes ``model``'s parameters (and
+        its excitation period, unless the period was given explicitly) and checks the
+        step's stability again. Continuation moves a parameter at every correction.
+
+        Raises
+        ------
+        ValueError
+            If ``model`` has another structure (other components, laws or modes).
+        StepTooLargeError
+            If the step is unstable with the new parameters.
+        """
+        if model.structure_key() != self.model.structure_key():
+            raise ValueError("with_parameters needs a model of the same structure (only parameter values may differ)")
+        new = copy.copy(self)
+        new.model = model
+        new.p_raw = np.array([model.parameters[n] for n in self.meta["params"]], dtype=float)
+        new.p = self.module.derived(new.p_raw)
+        if not self._explicit_period:
+            new.period = excitation_period(model)
+        new._g = np.empty_like(self._g)
+        new._ytmp = np.empty_like(self._ytmp)
+        if self._check_stability:
+            # the step itself inside the stability region in every mode settles it; the limit
+            # (a bisection on each eigenvalue's ray) is only needed for the error message
+            h = new.period / new.steps_per_period
+            lam = np.concatenate([physical_eigenvalues(self.module.jacobian(m, new.p_raw)[:self.n_physical, :self.n_physical])
+                                  for m in range(len(self.meta["modes"]))])
+            if not np.all(np.abs(self.method.amplification(h * lam)) <= 1.0 + 1e-12):
+                new._check_step()
+        return new
 
     @property
     def mode_names(self) -> list[str]:

@@ -9,7 +9,7 @@ four, but the error falls as ``h^8`` instead of ``h^4``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -31,23 +31,24 @@ class Method:
     A: np.ndarray
     b: np.ndarray
     c: np.ndarray
+    _highest_first: np.ndarray = field(init=False, repr=False, compare=False)
 
     @property
     def stages(self) -> int:
         """Number of stages (right-hand-side evaluations a step)."""
         return len(self.b)
 
+    def __post_init__(self):
+        c = [1.0]
+        v = np.ones(self.stages)
+        for _ in range(self.stages):
+            c.append(float(self.b @ v))
+            v = self.A @ v
+        object.__setattr__(self, "_highest_first", np.array(c[::-1]))
+
     def amplification(self, z):
         """Stability function ``R(z) = 1 + sum_k (b^T A^(k-1) 1) z^k`` (a polynomial: the method is explicit)."""
-        z = np.asarray(z, dtype=complex)
-        out = np.ones_like(z)
-        v = np.ones(self.stages)
-        zk = np.ones_like(z)
-        for _ in range(self.stages):
-            zk = zk * z
-            out = out + float(self.b @ v) * zk
-            v = self.A @ v
-        return out
+        return np.polyval(self._highest_first, np.asarray(z, dtype=complex))
 
     def tableau(self) -> np.ndarray:
         """``A`` (row by row), ``b`` and ``c`` in one flat array, as the kernels read them."""

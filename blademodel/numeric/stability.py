@@ -38,10 +38,15 @@ def ray_limits(lams, amplification=rk4_amplification) -> np.ndarray:
     return out
 
 
+def physical_eigenvalues(J: np.ndarray) -> np.ndarray:
+    """The eigenvalues of ``J`` that a stable step must keep bounded (physically growing ones left out)."""
+    lam = np.linalg.eigvals(J)
+    return lam[~(lam.real > 1e-9 * np.maximum(np.abs(lam), 1.0))]
+
+
 def stable_step(J: np.ndarray, amplification=rk4_amplification) -> float:
     """Largest stable step for the state Jacobian ``J`` (its physically unstable modes left out)."""
-    lam = np.linalg.eigvals(J)
-    lam = lam[~(lam.real > 1e-9 * np.maximum(np.abs(lam), 1.0))]
+    lam = physical_eigenvalues(J)
     return float(np.min(ray_limits(lam, amplification))) if lam.size else math.inf
 
 
@@ -61,12 +66,16 @@ def max_stable_step(jacobian, n_modes: int, p: np.ndarray, n_state: int,
     amplification : callable
         The method's stability function (default RK4's).
     """
-    best, which = math.inf, -1
+    lams, owner = [], []
     for mode in range(n_modes):
-        h = stable_step(jacobian(mode, p)[:n_state, :n_state], amplification)
-        if h < best:
-            best, which = h, mode
-    return best, which
+        lam = physical_eigenvalues(jacobian(mode, p)[:n_state, :n_state])
+        lams.append(lam)
+        owner.append(np.full(lam.size, mode))
+    if not lams or not sum(lam.size for lam in lams):
+        return math.inf, -1
+    limits = ray_limits(np.concatenate(lams), amplification)   # every mode's rays in one bisection
+    i = int(np.argmin(limits))
+    return (float(limits[i]), int(np.concatenate(owner)[i])) if math.isfinite(limits[i]) else (math.inf, -1)
 
 
 def check_step(period: float, steps_per_period: int, h_max: float, mode_name: str, method: str = "rk4") -> None:

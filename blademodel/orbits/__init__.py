@@ -5,13 +5,17 @@ map that takes the state at ``t = 0`` to the state at ``t = n T``
 (:class:`~blademodel.orbits.period_map.PeriodMap`, the exact hybrid flow of the
 compiled kernel: RK4 or RK8 with located events). :func:`find_periodic_orbit` finds
 one by Newton's method on that map; the eigenvalues of the map's Jacobian (the
-monodromy matrix) are the orbit's Floquet multipliers. The Jacobian is taken by
-central differences of the map (``docs/orbits.md``).
+monodromy matrix) are the orbit's Floquet multipliers. The Jacobian is the tangent of
+the flow (variational equations with saltation matrices at the events,
+:mod:`blademodel.numeric.tangent`) on the product-mode kernel, central differences of
+the map elsewhere (``docs/orbits.md``). :func:`continuation` follows a branch in a
+config field; :func:`period_doubled_branch` switches to the branch born at a period
+doubling.
 """
 
-from .arclength import Branch, SpecialPoint, continuation
+from .arclength import Branch, SpecialPoint, continuation, period_doubled_branch
 from .period_map import FlowError, PeriodMap
 from .shooting import PeriodicOrbit, ShootingError, find_periodic_orbit
 
 __all__ = ["Branch", "FlowError", "PeriodMap", "PeriodicOrbit", "ShootingError", "SpecialPoint", "continuation",
-           "find_periodic_orbit"]
+           "find_periodic_orbit", "period_doubled_branch"]

@@ -50,6 +50,8 @@ class SpecialPoint:
         grazing point, the largest one).
     index : int
         The branch point after which it lies.
+    mode : int or ndarray, optional
+        The orbit's hybrid mode at the section (not kept in branch files).
     """
 
     kind: str
@@ -57,6 +59,7 @@ class SpecialPoint:
     state: np.ndarray
     multiplier: complex
     index: int
+    mode: object = None
 
 
 @dataclass
@@ -112,14 +115,16 @@ class _Family:
     a declared parameter by its bare name (``omega``).
     """
 
-    def __init__(self, config, name: str, periods: int, settings: dict, start: float):
+    def __init__(self, config, name: str, periods: int, settings: dict, start: float, jacobian: str = "auto"):
         self.config, self.name, self.periods, self.settings = config, name, periods, settings
+        self.jacobian = jacobian
         try:
             self.config_at(start)
         except ValueError as e:
             raise ValueError(f"{type(config).__name__} has no field {name!r} to continue in, or {start!r} is not "
                              f"a value it takes: {e}") from None
         self._cache: dict = {}
+        self._first = None
 
     def config_at(self, value: float):
         from ..config import apply_overrides
@@ -140,13 +145,20 @@ class _Family:
         return (out[0][0] - out[1][0]) / (2 * delta), (out[0][1] - out[1][1]) / (2 * delta)
 
     def map_at(self, value: float) -> PeriodMap:
+        """The period map at ``value`` (the first integrator's parameters changed, where the kernel allows)."""
         key = float(value)
         if key not in self._cache:
             from ..numeric.kernels import make_integrator
             if len(self._cache) > 8:
                 self._cache.pop(next(iter(self._cache)))
-            self._cache[key] = PeriodMap(make_integrator(self.config_at(key).build(), **self.settings),
-                                         self.periods)
+            model = self.config_at(key).build()
+            if self._first is not None and hasattr(self._first, "with_parameters") \
+                    and model.structure_key() == self._first.model.structure_key():
+                ig = self._first.with_parameters(model)
+            else:
+                ig = make_integrator(model, **self.settings)
+                self._first = ig
+            self._cache[key] = PeriodMap(ig, self.periods, self.jacobian)
         return self._cache[key]
 
 
@@ -154,7 +166,7 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
                  transient: int = 20, ds: float = 0.01, ds_min: float = 1e-5, ds_max: float = 0.05,
                  max_points: int = 400, tol: float = 1e-10, max_corrections: int = 8, rel_step: float = 1e-6,
                  locate_tol: float = 1e-7, steps_per_period: int = 1000, event_tol: float = 1e-10,
-                 method: str = "rk4", kernel: str = "auto",
+                 method: str = "rk4", kernel: str = "auto", jacobian: str = "auto",
                  progress: Callable[[int, float], None] | None = None) -> Branch:
     """Follow the periodic orbits of ``config`` as its field ``name`` goes from ``start`` toward ``stop``.
 
@@ -185,6 +197,8 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         Bifurcations are located to this fraction of the range.
     steps_per_period, event_tol, method, kernel
         The integrator's settings.
+    jacobian : {"auto", "tangent", "differences"}
+        How the period map is differentiated (:class:`~blademodel.orbits.period_map.PeriodMap`).
     progress : callable, optional
         ``progress(point, value)`` after each point.
 
@@ -193,29 +207,130 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
     Branch
     """
     settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
-    fam = _Family(config, name, periods, settings, start)
+    fam = _Family(config, name, periods, settings, start, jacobian)
     span = abs(stop - start)
     if not span > 0:
         raise ValueError(f"start and stop must differ, got {start!r} and {stop!r}")
     direction = 1.0 if stop > start else -1.0
     P0 = fam.map_at(start)
     first = find_periodic_orbit(None, periods=periods, guess=guess, mode=mode, transient=transient, tol=tol,
-                                rel_step=rel_step, integrator=P0.integrator)
-    ig = P0.integrator
+                                rel_step=rel_step, integrator=P0.integrator, jacobian=jacobian)
     scale = first.scale
     n = scale.size
     ctx = _Context(fam, scale, span, tol, rel_step, max_corrections)
-    n_q = _n_coordinates(ig)
 
     # scaled unknowns X = (y / scale, lambda / span)
     X = np.append(first.state / scale, start / span)
     m = first.mode
     A = ctx.jacobian(X, m)
     T = _tangent(A, np.append(np.zeros(n), direction))
-    pts = [ctx.point(X, m, A)]
-    special: list = []
+    return _follow(ctx, [ctx.point(X, m, A)], X, T, m, A, (start, stop), ds=ds, ds_min=ds_min, ds_max=ds_max,
+                   max_points=max_points, locate_tol=locate_tol, progress=progress)
+
+
+def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, stop: float, *,
+                          periods: int = 1, ds: float = 0.01, ds_min: float = 1e-5, ds_max: float = 0.05,
+                          max_points: int = 400, tol: float = 1e-10, max_corrections: int = 8,
+                          rel_step: float = 1e-6, locate_tol: float = 1e-7, steps_per_period: int = 1000,
+                          event_tol: float = 1e-10, method: str = "rk4", kernel: str = "auto",
+                          jacobian: str = "auto", progress: Callable[[int, float], None] | None = None) -> Branch:
+    """The branch of period-``2 periods`` orbits born at a period doubling of a period-``periods`` branch.
+
+    At a period doubling the map over ``periods`` excitation periods has the multiplier
+    ``-1`` with eigenvector ``v``; the map over twice as many has ``+1`` there, and two
+    branches of its fixed points cross: the old orbits (traversed twice) and the new
+    ones, which leave along ``v`` at right angles to the field (a pitchfork of the
+    doubled map). The switch is one pseudo-arclength step of the doubled map from the
+    bifurcation point along ``(v, 0)``; from the point it converges to, the branch is
+    followed as by :func:`continuation`, in whichever direction of the field it goes,
+    until the field leaves ``[start, stop]``. The branch's first point is the bifurcation
+    itself (on the old orbit); a supercritical doubling sends the new branch to the
+    side where the old orbits are unstable, a subcritical one to the other.
+
+    Parameters
+    ----------
+    config, name
+        As for :func:`continuation`.
+    point : SpecialPoint
+        A ``"period-doubling"`` point of a branch of ``periods``-periodic orbits.
+    start, stop : float
+        The range of the field the new branch is followed in (it must contain the point).
+    periods : int
+        Period of the *old* branch; the new one has twice it.
+    ds, ds_min, ds_max, max_points, tol, max_corrections, rel_step, locate_tol, steps_per_period, event_tol,
+    method, kernel, jacobian, progress
+        As for :func:`continuation`; ``ds`` is also the switch's step along ``v``.
+
+    Returns
+    -------
+    Branch
+        With ``periods`` twice the old branch's.
+
+    Raises
+    ------
+    ValueError
+        If ``point`` is not a period doubling, or lies outside ``[start, stop]``.
+    FlowError
+        If the switch converges back onto the old orbits for both signs of ``v``.
+    """
+    if point.kind != "period-doubling":
+        raise ValueError(f"point must be a period-doubling point, got a {point.kind!r} point")
+    lo, hi = min(start, stop), max(start, stop)
+    if not lo <= point.param <= hi:
+        raise ValueError(f"the period doubling at {name} = {point.param:g} lies outside [{lo:g}, {hi:g}]")
+    settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
+    fam = _Family(config, name, 2 * periods, settings, point.param, jacobian)
+    span = hi - lo
+    P2 = fam.map_at(point.param)
+    ig = P2.integrator
+    y = np.asarray(point.state, dtype=float)
+    mode = point.mode
+    if mode is None:
+        full = np.zeros(ig.n_state)
+        full[:y.size] = y
+        mode = ig.mode_of(full)
+    scale = _state_scale(_orbit_samples(ig, y, mode, 2 * periods)[1], _n_coordinates(ig))
+    J1 = PeriodMap(ig, periods, jacobian).jacobian(y, _copy(mode), scale, rel_step)
+    mu, V = np.linalg.eig(J1)
+    k = int(np.argmin(np.abs(mu + 1.0)))
+    v = np.real(V[:, k]) / scale
+    v /= np.linalg.norm(v)
+    ctx = _Context(fam, scale, span, tol, rel_step, max_corrections)
+    X0 = np.append(y / scale, point.param / span)
+    A0 = ctx.jacobian(X0, mode)
+    old = PeriodMap(ig, periods, jacobian)
+    for sign in (1.0, -1.0, 2.0, -2.0):
+        T0 = np.append(sign * v, 0.0) / abs(sign)
+        X1, m1, A1 = ctx.correct(X0 + abs(sign) * ds * T0, T0, _copy(mode))
+        if X1 is None:
+            continue
+        y1 = X1[:-1] * scale
+        r_old = np.max(np.abs(old(y1, _copy(m1))[0] - y1) / scale)
+        if r_old > 1e3 * tol:   # not the old orbit again
+            break
+    else:
+        raise FlowError(f"the switch at {name} = {point.param:g} came back to the period-{periods} orbits "
+                        f"for both signs of the critical eigenvector")
+    T1 = _tangent(A1, X1 - X0)
+    pts = [ctx.point(X0, mode, A0), ctx.point(X1, m1, A1)]
+    X, T, A = ctx.rescale(_state_scale(pts[-1]["Y"], _n_coordinates(ig)), X1, T1, A1)
+    pts[-1]["X"], pts[-1]["A"] = X, A
+    return _follow(ctx, pts, X, T, m1, A, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points,
+                   locate_tol=locate_tol, progress=progress)
+
+
+def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, locate_tol, progress,
+            special=None) -> Branch:
+    """Continue from the last point ``pts[-1]`` (unknowns ``X``, tangent ``T``) until the field leaves ``bounds``."""
+    fam, span = ctx.fam, ctx.span
+    name, periods = fam.name, fam.periods
+    ig = fam.map_at(X[-1] * span).integrator
+    n = ctx.n
+    n_q = _n_coordinates(ig)
+    lo, hi = min(bounds), max(bounds)
+    special = list(special or [])
     h = ds
-    message = f"reached {name} = {stop:g}"
+    message = f"left [{lo:g}, {hi:g}] in {name}"
     jumped = False
     while len(pts) < max_points:
         X_new, m_new, A_new = ctx.correct(X + h * T, T, m, A)
@@ -258,7 +373,9 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         if progress is not None:
             progress(len(pts), X[-1] * span)
         lam = X[-1] * span
-        if (lam - stop) * direction > 0 or (lam - start) * direction < -1e-12 * span:
+        if lam > hi + 1e-12 * span or lam < lo - 1e-12 * span:
+            if bounds[1] in (lo, hi) and (lam > hi if bounds[1] == hi else lam < lo):
+                message = f"reached {name} = {bounds[1]:g}"
             break
     else:
         message = f"stopped after max_points = {max_points} points at {name} = {X[-1] * span:.6g}"
@@ -429,7 +546,7 @@ class _Context:
             best = self._bisect(a, b, Xa, Ta, mode, what, locate_tol)
             if what == "events":
                 found.append(SpecialPoint(kind="grazing", param=best["param"], state=best["state"],
-                                          multiplier=complex(best["mu"][0]), index=index))
+                                          multiplier=complex(best["mu"][0]), index=index, mode=_copy(best["mode"])))
                 continue
             mu = best["mu"][np.argmin(np.abs(np.abs(best["mu"]) - 1.0))]
             if abs(mu.imag) > 1e-6 * abs(mu):
@@ -437,7 +554,7 @@ class _Context:
             else:
                 kind = "period-doubling" if mu.real < 0 else "fold"
             found.append(SpecialPoint(kind=kind, param=best["param"], state=best["state"], multiplier=complex(mu),
-                                      index=index))
+                                      index=index, mode=_copy(best["mode"])))
         return found
 
     def _bisect(self, a, b, Xa, Ta, mode, what, locate_tol):

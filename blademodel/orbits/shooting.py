@@ -105,12 +105,13 @@ def _state_scale(y_hist: np.ndarray, n_q: int) -> np.ndarray:
 def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, transient: int = 20,
                         tol: float = 1e-10, max_iter: int = 30, rel_step: float = 1e-6,
                         steps_per_period: int = 1000, event_tol: float = 1e-10, method: str = "rk4",
-                        kernel: str = "auto", integrator=None) -> PeriodicOrbit:
+                        kernel: str = "auto", integrator=None, jacobian: str = "auto") -> PeriodicOrbit:
     """A periodic orbit of ``periods`` excitation periods by shooting on the exact hybrid flow.
 
     Newton's method on ``r(y) = P(y) - y``, ``P`` the map over ``periods * T``
     (:class:`~blademodel.orbits.period_map.PeriodMap`), with the Jacobian
-    ``dP/dy`` by central differences, each state scaled by its excursion; a step
+    ``dP/dy`` from the tangent of the flow or by central differences (``jacobian``),
+    each state scaled by its excursion; a step
     that does not reduce the residual is halved (up to eight times). The Floquet
     multipliers are the eigenvalues of ``dP/dy`` at the solution. Unstable orbits
     are found as readily as stable ones: nothing here integrates toward an attractor
@@ -138,6 +139,10 @@ def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, trans
         The integrator's settings (:func:`blademodel.numeric.simulate`).
     integrator : Integrator, optional
         Use this integrator (its settings) instead of making one.
+    jacobian : {"auto", "tangent", "differences"}
+        How ``dP/dy`` is formed (:class:`~blademodel.orbits.period_map.PeriodMap`): the
+        tangent of the flow (variational equations, saltation matrices) on the
+        product-mode kernel, central differences elsewhere.
 
     Returns
     -------
@@ -156,7 +161,7 @@ def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, trans
         integrator = make_integrator(model, kernel=kernel, steps_per_period=steps_per_period,
                                      event_tol=event_tol, method=method)
     ig = integrator
-    P = PeriodMap(ig, periods)
+    P = PeriodMap(ig, periods, jacobian)
     n = P.n
     y_full = ig.initial_state(guess)
     if mode is None:
