@@ -101,18 +101,23 @@ def test_a_branch_file_round_trip(pd_branch, tmp_path):
 
 
 def test_the_continue_command(tmp_path, capsys):
-    """``blademodel continue``: the JSON report, the file and the plot; a missing field is named."""
+    """``blademodel continue``: the JSON report, the files and the plot, with the branch switched to at the period
+    doubling (``--switch``) saved beside the first; a missing field is named."""
     import json
     from pathlib import Path
 
     from blademodel.cli import main
     yaml = str(Path(__file__).resolve().parent.parent / "models" / "blade_pair_bilinear.yaml")
     out, png = tmp_path / "b.nc", tmp_path / "b.png"
-    assert main(["continue", yaml, "--param", "gamma", "--from", "7.2", "--to", "7.5", "--json",
+    assert main(["continue", yaml, "--param", "gamma", "--from", "7.2", "--to", "7.5", "--json", "--switch",
                  "--out", str(out), "--plot", str(png)]) == 0
     rep = json.loads(capsys.readouterr().out)
     pd = [p for p in rep["special"] if p["kind"] == "period-doubling"]
     assert len(pd) == 1 and 7.3 < pd[0]["value"] < 7.35
+    assert len(rep["doubled"]) == 1 and rep["doubled"][0]["periods"] == 2
+    assert rep["doubled"][0]["values"][0] == pd[0]["value"] and any(rep["doubled"][0]["stable"])
+    from blademodel.orbits.branch_file import load_branch
+    assert load_branch(tmp_path / "b_pd1.nc").periods == 2
     assert rep["stable"][0] and not rep["stable"][-1] and out.stat().st_size > 0 and png.stat().st_size > 0
     assert main(["continue", yaml, "--param", "no_such_field", "--from", "1", "--to", "2"]) == 2
     assert "no field 'no_such_field'" in capsys.readouterr().err

@@ -8,7 +8,7 @@ import sys
 import numpy as np
 
 from ..config import ConfigError, apply_overrides, load_config
-from ..orbits import FlowError, ShootingError, continuation
+from ..orbits import FlowError, ShootingError, continuation, period_doubled_branch
 from . import jsonout
 from .common import add_model_arguments, parse_overrides
 from .output import check_output_file
@@ -33,6 +33,12 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--steps-per-period", type=int, default=1000, metavar="S",
                    help="steps per excitation period (default 1000)")
     p.add_argument("--method", choices=("rk4", "rk8"), default="rk4", help="stepping method (default rk4)")
+    p.add_argument("--switch", action="store_true",
+                   help="also follow the period-doubled branch born at each period doubling found "
+                        "(saved beside --out as FILE_pd1.nc, ...; drawn on the same --plot)")
+    p.add_argument("--quantity", choices=("harmonic", "amplitude", "section"), default="harmonic",
+                   help="what --plot draws: first-harmonic amplitude (an FRF, default), half the peak-to-peak "
+                        "excursion, or the Poincare samples (a bifurcation diagram)")
     p.add_argument("--state", default=None, help="state plotted and reported (default: the first coordinate)")
     p.add_argument("--out", metavar="FILE.nc", help="write the branch (NetCDF)")
     p.add_argument("--plot", metavar="FILE.png", help="draw the branch (stable solid, unstable dashed)")
@@ -73,21 +79,50 @@ def run(args: argparse.Namespace) -> int:
         return 1
     if sys.stderr.isatty():
         print(file=sys.stderr)
+    doubled = []
+    if args.switch:
+        for k, pd in enumerate(branch.points("period-doubling"), 1):
+            try:
+                doubled.append(period_doubled_branch(
+                    config, args.param, pd, args.start, args.stop, periods=args.period, max_points=args.max_points,
+                    ds_max=args.ds_max, steps_per_period=args.steps_per_period, method=args.method,
+                    progress=_progress))
+            except (ShootingError, FlowError) as e:
+                print(f"warning: no switch at the period doubling {k} ({args.param} = {pd.param:.6g}): {e}",
+                      file=sys.stderr)
+                doubled.append(None)
+            if sys.stderr.isatty():
+                print(file=sys.stderr)
     state = args.state or branch.state_names[0]
     if state not in branch.state_names:
         raise ValueError(f"--state {state!r}: not a state of the model ({', '.join(branch.state_names)})")
+    doubled_files = []
     if args.out:
+        from pathlib import Path
+
         from ..orbits.branch_file import save_branch
         save_branch(branch, args.out, config)
+        for k, b in enumerate(doubled, 1):
+            if b is not None:
+                name = str(Path(args.out).with_name(f"{Path(args.out).stem}_pd{k}.nc"))
+                save_branch(b, name, config)
+                doubled_files.append(name)
     if args.plot:
         from ..plots.branch import branch_figure
-        branch_figure(branch, state).savefig(args.plot, dpi=120)
+        branch_figure([branch, *[b for b in doubled if b is not None]], state,
+                      quantity=args.quantity).savefig(args.plot, dpi=120)
     i = branch.state_names.index(state)
     rep = {"field": branch.field, "periods": branch.periods, "points": len(branch.params),
            "message": branch.message, "values": branch.params.tolist(),
            "harmonic1": np.abs(branch.harmonics[:, i]).tolist(), "stable": branch.stable.tolist(),
            "special": [{"kind": p.kind, "value": p.param, "multiplier": [p.multiplier.real, p.multiplier.imag]}
-                       for p in branch.special], "state": state}
+                       for p in branch.special], "state": state,
+           "doubled": [None if b is None else {"periods": b.periods, "points": len(b.params), "message": b.message,
+                                               "values": b.params.tolist(),
+                                               "harmonic1": np.abs(b.harmonics[:, i]).tolist(),
+                                               "stable": b.stable.tolist(),
+                                               "special": [{"kind": p.kind, "value": p.param} for p in b.special]}
+                       for b in doubled]}
     if args.json:
         print(jsonout.dumps(rep))
         return 0
@@ -96,7 +131,14 @@ def run(args: argparse.Namespace) -> int:
     for p in branch.special:
         print(f"  {p.kind} at {args.param} = {p.param:.8g} (multiplier {p.multiplier.real:.6g}"
               f"{p.multiplier.imag:+.6g}i)")
-    for what, name in (("saved", args.out), ("plotted", args.plot)):
+    for k, b in enumerate(doubled, 1):
+        if b is None:
+            continue
+        print(f"{len(b.params)} period-{b.periods} orbits from the period doubling {k}, {args.param} = "
+              f"{b.params.min():.6g} to {b.params.max():.6g} ({b.message}); {int(np.sum(~b.stable))} unstable")
+        for p in b.special:
+            print(f"  {p.kind} at {args.param} = {p.param:.8g}")
+    for what, name in (("saved", args.out), ("saved", ", ".join(doubled_files)), ("plotted", args.plot)):
         if name:
             print(f"{what} {name}")
     return 0

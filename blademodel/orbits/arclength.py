@@ -83,6 +83,9 @@ class Branch:
         First harmonic (of the excitation) of each state.
     events : ndarray of int
         Events per orbit (over ``periods`` excitation periods).
+    sections : ndarray, shape (points, periods, states)
+        The states at ``t = k T``, ``k = 0 .. periods - 1``: the orbit's Poincare samples
+        (a period-2 orbit has two; a bifurcation diagram draws them all).
     special : list of SpecialPoint
     state_names : list of str
     message : str
@@ -98,6 +101,7 @@ class Branch:
     amplitudes: np.ndarray
     harmonics: np.ndarray
     events: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    sections: np.ndarray = field(default_factory=lambda: np.zeros((0, 1, 0)))
     special: list = field(default_factory=list)
     state_names: list = field(default_factory=list)
     message: str = ""
@@ -384,7 +388,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
                   stable=np.array([p["stable"] for p in pts], dtype=bool),
                   amplitudes=np.array([p["amp"] for p in pts]), harmonics=np.array([p["h1"] for p in pts]),
                   events=np.array([p["events"] for p in pts], dtype=np.int64),
-                  special=special, state_names=list(ig.meta["state"][:n]),
+                  sections=np.array([p["sections"] for p in pts]), special=special, state_names=list(ig.meta["state"][:n]),
                   message=message)
 
 
@@ -527,7 +531,8 @@ class _Context:
         t, Y = _orbit_samples(P.integrator, y, mode, self.fam.periods, counters)
         amp = 0.5 * (Y.max(axis=0) - Y.min(axis=0))
         c = np.fft.rfft(Y[:-1], axis=0)[self.fam.periods] * 2.0 / (Y.shape[0] - 1)
-        return {"param": lam, "state": y, "mu": mu, "stable": bool(np.max(np.abs(mu)) < 1.0), "amp": amp,
+        S = P.integrator.steps_per_period
+        return {"param": lam, "state": y, "sections": Y[:-1:S].copy(), "mu": mu, "stable": bool(np.max(np.abs(mu)) < 1.0), "amp": amp,
                 "h1": c, "unstable": _unstable_count(mu), "X": X.copy(), "mode": _copy(mode), "A": A, "Y": Y,
                 "events": int(counters[C_EVENTS])}
 

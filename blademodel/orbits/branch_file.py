@@ -16,7 +16,8 @@ def save_branch(branch: Branch, path, config=None) -> None:
     """Write ``branch`` to the NetCDF file ``path`` (written whole, then moved into place).
 
     Variables: the field's value per ``point`` (a coordinate), the section state,
-    amplitudes and first harmonics (magnitude and phase) per ``point`` and ``state``
+    amplitudes and first harmonics (magnitude and phase) per ``point`` and ``state``, the
+    Poincare samples per ``point``, ``section`` (``t = k T``) and ``state``
     (DOF names as a string coordinate), the multipliers (real and imaginary parts)
     per ``point`` and ``multiplier``, ``stable``, and the special points (kind,
     value, multiplier) along ``special``. Units and long names are attributes; the
@@ -37,6 +38,7 @@ def save_branch(branch: Branch, path, config=None) -> None:
         ds.createDimension("state", n)
         ds.createDimension("multiplier", n)
         ds.createDimension("special", len(branch.special))
+        ds.createDimension("section", branch.periods)
         v = ds.createVariable("point", "i8", ("point",))
         v[:] = np.arange(k)
         v = ds.createVariable("state", str, ("state",))
@@ -52,6 +54,9 @@ def save_branch(branch: Branch, path, config=None) -> None:
             v = ds.createVariable(name, "f8", ("point", "state"))
             v[:] = data
             v.long_name = long
+        v = ds.createVariable("section_samples", "f8", ("point", "section", "state"))
+        v[:] = branch.sections
+        v.long_name = "states at t = k T, k = 0 .. periods - 1 (Poincare samples of the orbit)"
         for name, data in (("multiplier_re", branch.multipliers.real), ("multiplier_im", branch.multipliers.imag)):
             v = ds.createVariable(name, "f8", ("point", "multiplier"))
             v[:] = data
@@ -87,5 +92,7 @@ def load_branch(path) -> Branch:
                       states=ds["section_state"][:].data.copy(), multipliers=mu,
                       stable=ds["stable"][:].data.astype(bool), amplitudes=ds["amplitude"][:].data.copy(),
                       events=ds["events"][:].data.copy(),
+                      sections=ds["section_samples"][:].data.copy() if "section_samples" in ds.variables
+                      else ds["section_state"][:].data[:, None, :].copy(),
                       harmonics=ds["harmonic1_abs"][:].data * np.exp(1j * ds["harmonic1_phase"][:].data),
                       special=special, state_names=[str(s) for s in ds["state"][:]], message=ds.message)

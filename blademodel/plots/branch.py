@@ -19,41 +19,63 @@ def _between(value, x, y, k):
     return y[k] + s * (y[k1] - y[k])
 
 
+#: Line colours of successive branches in one figure: (stable, unstable).
+COLOURS = [("C0", "C3"), ("C2", "C1"), ("C4", "C6"), ("C9", "C5")]
+
+
 def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", overlay=None) -> Figure:
-    """Forced-response or bifurcation plot of a :class:`~blademodel.orbits.Branch`.
+    """Forced-response or bifurcation plot of a :class:`~blademodel.orbits.Branch` (or several).
 
     Parameters
     ----------
-    branch : Branch
+    branch : Branch or list of Branch
+        Several (a branch and those switched to at its period doublings) share the axes,
+        each in its own colours.
     state : str
         The state plotted.
-    quantity : {"harmonic", "amplitude"}
-        First-harmonic amplitude, or half the peak-to-peak excursion over the orbit.
+    quantity : {"harmonic", "amplitude", "section"}
+        First-harmonic amplitude (of the excitation frequency), half the peak-to-peak
+        excursion over the orbit, or the Poincare samples ``state(k T)`` (a bifurcation
+        diagram: a period-2 orbit draws two curves).
     overlay : tuple of arrays, optional
         ``(values, amplitudes)`` of a brute-force sweep, drawn as dots.
     """
-    i = branch.state_names.index(state)
-    y = np.abs(branch.harmonics[:, i]) if quantity == "harmonic" else branch.amplitudes[:, i]
-    x = branch.params
+    branches = list(branch) if isinstance(branch, (list, tuple)) else [branch]
     fig = Figure(figsize=(7, 4.2))
     ax = fig.add_subplot()
-    stable = branch.stable
-    for k in range(len(x) - 1):   # each segment drawn as its end points' stability: solid or dashed
-        both = stable[k] and stable[k + 1]
-        ax.plot(x[k:k + 2], y[k:k + 2], "-" if both else "--", color="C0" if both else "C3", lw=1.6)
-    ax.plot([], [], "-", color="C0", label="stable")
-    ax.plot([], [], "--", color="C3", label="unstable")
-    for kind, (marker, label) in MARKERS.items():
-        pts = [p for p in branch.special if p.kind == kind]
-        if pts:
-            yy = [_between(p.param, x, y, p.index) for p in pts]
-            ax.plot([p.param for p in pts], yy, marker, color="k", ms=7, label=label)
+    marked = set()
+    for b, (c_stable, c_unstable) in zip(branches, COLOURS * len(branches)):
+        i = b.state_names.index(state)
+        if quantity == "section":
+            curves = [b.sections[:, k, i] for k in range(b.sections.shape[1])]
+        else:
+            curves = [np.abs(b.harmonics[:, i]) if quantity == "harmonic" else b.amplitudes[:, i]]
+        y = curves[0]
+        x = b.params
+        stable = b.stable
+        for yc in curves:
+            for k in range(len(x) - 1):   # each segment drawn as its end points' stability: solid or dashed
+                both = stable[k] and stable[k + 1]
+                ax.plot(x[k:k + 2], yc[k:k + 2], "-" if both else "--", color=c_stable if both else c_unstable,
+                        lw=1.6)
+        tag = f"period {b.periods}, " if len(branches) > 1 else ""
+        ax.plot([], [], "-", color=c_stable, label=f"{tag}stable")
+        ax.plot([], [], "--", color=c_unstable, label=f"{tag}unstable")
+        for kind, (marker, label) in MARKERS.items():
+            pts = [p for p in b.special if p.kind == kind]
+            if pts:
+                yy = [_between(p.param, x, y, p.index) for p in pts]
+                ax.plot([p.param for p in pts], yy, marker, color="k", ms=7, mfc="none" if kind == "grazing" else "k",
+                        label=None if kind in marked else label)
+                marked.add(kind)
     if overlay is not None:
         ax.plot(overlay[0], overlay[1], ".", color="0.5", ms=3, label="integration")
-    what = "first-harmonic amplitude" if quantity == "harmonic" else "amplitude"
-    ax.set_xlabel(branch.field)
+    what = {"harmonic": "first-harmonic amplitude", "amplitude": "amplitude", "section": "Poincare samples"}[quantity]
+    first = branches[0]
+    ax.set_xlabel(first.field)
     ax.set_ylabel(f"{what} of {state}")
-    ax.set_title(f"period-{branch.periods} orbits continued in {branch.field}")
+    periods = sorted({b.periods for b in branches})
+    ax.set_title(f"period-{'/'.join(str(p) for p in periods)} orbits continued in {first.field}")
     ax.legend(loc="best", fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
