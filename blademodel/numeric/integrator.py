@@ -167,6 +167,10 @@ def check_advance_arguments(integ: "Integrator", y, mode, start_period, end_peri
         _check_array("stats", stats, np.empty(1), N_STATS)
 
 
+class StructureMismatch(ValueError):
+    """A model given to :meth:`HybridIntegrator.with_parameters` differs in more than parameter values."""
+
+
 class Integrator:
     """What every kernel's integrator shares: the model, the step settings, the state layout.
 
@@ -269,13 +273,14 @@ class HybridIntegrator(Integrator):
 
         Raises
         ------
-        ValueError
+        StructureMismatch
             If ``model`` has another structure (other components, laws or modes).
         StepTooLargeError
             If the step is unstable with the new parameters.
         """
         if model.structure_key() != self.model.structure_key():
-            raise ValueError("with_parameters needs a model of the same structure (only parameter values may differ)")
+            raise StructureMismatch("with_parameters needs a model of the same structure "
+                                    "(only parameter values may differ)")
         new = copy.copy(self)
         new.model = model
         new.p_raw = np.array([model.parameters[n] for n in self.meta["params"]], dtype=float)

@@ -57,9 +57,14 @@ class FlowSensitivity:
     events: int
 
 
+_MODULES: dict = {}
+
+
 def sensitivity_module(integrator) -> ModuleType:
     """The compiled sensitivity module of a product-mode integrator's model (built once per structure)."""
     compiled = integrator.compiled
+    if compiled.path in _MODULES:
+        return _MODULES[compiled.path]
     here = PACKAGE / "numeric"
     key = hash_sources([compiled.path, here / "sensitivity_codegen.py", here / "tangent_loop.py",
                         here / "contract.py"])
@@ -77,7 +82,8 @@ def sensitivity_module(integrator) -> ModuleType:
         tmp = path.with_suffix(f".tmp{os.getpid()}")
         tmp.write_text("\n".join(L) + "\n")
         os.replace(tmp, path)
-    return _load(path)
+    _MODULES[compiled.path] = _load(path)
+    return _MODULES[compiled.path]
 
 
 def _tableau(integrator) -> np.ndarray:

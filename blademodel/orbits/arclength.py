@@ -155,11 +155,15 @@ class _Family:
             from ..numeric.kernels import make_integrator
             if len(self._cache) > 8:
                 self._cache.pop(next(iter(self._cache)))
+            from ..numeric.integrator import StructureMismatch
             model = self.config_at(key).build()
-            if self._first is not None and hasattr(self._first, "with_parameters") \
-                    and model.structure_key() == self._first.model.structure_key():
-                ig = self._first.with_parameters(model)
-            else:
+            ig = None
+            if self._first is not None and hasattr(self._first, "with_parameters"):
+                try:
+                    ig = self._first.with_parameters(model)
+                except StructureMismatch:
+                    pass
+            if ig is None:
                 ig = make_integrator(model, **self.settings)
                 self._first = ig
             self._cache[key] = PeriodMap(ig, self.periods, self.jacobian)

@@ -17,6 +17,7 @@ was never installed, and a built-in name cannot be taken over by another package
 
 from __future__ import annotations
 
+import functools
 import importlib
 import inspect
 import re
@@ -156,8 +157,15 @@ class LawOptionError(ValueError):
 
 def accepted_options(cls: type) -> tuple[list[str], bool]:
     """Keyword arguments of ``cls``'s constructor, and whether it takes ``**kwargs``."""
+    names, var_kw = _signature_options(cls)
+    return list(names), var_kw
+
+
+@functools.lru_cache(maxsize=256)
+def _signature_options(cls: type) -> tuple[tuple[str, ...], bool]:
+    """:func:`accepted_options`, once per class (reading a signature costs tens of microseconds)."""
     params = inspect.signature(cls).parameters.values()
-    names = [p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    names = tuple(p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY))
     return names, any(p.kind is p.VAR_KEYWORD for p in params)
 
 
