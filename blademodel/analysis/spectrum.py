@@ -37,3 +37,36 @@ def amplitude_spectrum(x, samples_per_period: int) -> tuple[np.ndarray, np.ndarr
     if len(x) % 2 == 0:
         amp[-1] /= 2
     return np.arange(len(X)) / K, amp
+
+
+def harmonic_amplitudes(Y, samples_per_period: int, k: int = 1) -> np.ndarray:
+    """Amplitude of the ``k``-th harmonic of the excitation in each column of ``Y``.
+
+    Parameters
+    ----------
+    Y : array_like
+        Uniform samples (rows) of one or more signals (columns) over ``K`` whole periods:
+        ``K * samples_per_period`` rows, or one more (dropped, as in
+        :func:`amplitude_spectrum`).
+    samples_per_period : int
+    k : int
+        The harmonic (1: the excitation frequency itself).
+
+    Returns
+    -------
+    ndarray
+        One amplitude per column: a column ``A cos(k w t + phi) + ...`` gives ``A``.
+    """
+    Y = np.asarray(Y, dtype=float)
+    Y = Y[:, None] if Y.ndim == 1 else Y
+    S = int(samples_per_period)
+    if len(Y) % S == 1:
+        Y = Y[:-1]
+    if len(Y) % S or len(Y) == 0:
+        raise ValueError(f"{len(Y)} samples are not a whole number of periods of {S} samples")
+    K = len(Y) // S
+    if not 0 < k < S / 2:
+        raise ValueError(f"harmonic k = {k} must lie between 1 and half the samples per period ({S})")
+    n = np.arange(len(Y))
+    c = np.exp(-2j * np.pi * k * K * n / len(Y)) @ Y   # the one DFT bin of harmonic k, every column
+    return 2 * np.abs(c) / len(Y)

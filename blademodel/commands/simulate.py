@@ -78,6 +78,16 @@ def _vibration_reduction(model, result, args) -> tuple[float | None, str | None]
         return None, f"{e} (P_d = (P0 - P) / P0 needs P0 > 0)"
 
 
+def first_harmonics(result, n: int) -> dict | None:
+    """First-harmonic amplitude of the first ``n`` states over the recorded periods (None if they are not whole)."""
+    from ..analysis import harmonic_amplitudes
+    S, r = result.settings["steps_per_period"], result.settings.get("record_every", 1)
+    if S % r or len(result.t) < S // r + 1:
+        return None
+    amp = harmonic_amplitudes(result.y[:, :n], S // r)
+    return dict(zip(result.state_names[:n], map(float, amp)))
+
+
 def report(config, model, result) -> dict:
     """The JSON report of a run (SI units; ``X1 = x1 / gap``)."""
     scale = result.length_scale
@@ -88,6 +98,7 @@ def report(config, model, result) -> dict:
         "periodicity": periodicity_label(result.poincare[:, : len(model.coordinates) * 2])
         if len(result.poincare) > 1 else "unknown",
         "poincare": {key if scale else coord: list(map(float, x / scale if scale else x))},
+        "harmonic1": first_harmonics(result, len(model.coordinates) * 2),
         "final_state": result.final,
         "final_mode": result.mode_names[result.final_mode],
         "counters": result.counters,
@@ -157,6 +168,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"{model.name}: {rep['periodicity']} after {args.transient} periods "
               f"({result.counters['events']} events, {result.counters['steps']} steps)")
         print("final state: " + ", ".join(f"{k}={v:.6g}" for k, v in result.final.items()))
+        if rep["harmonic1"]:
+            coords = list(rep["harmonic1"])[:len(model.coordinates)]
+            print("first-harmonic amplitudes over the recorded periods: "
+                  + ", ".join(f"{k}={rep['harmonic1'][k]:.6g}" for k in coords))
         if why and model.contacts:
             print(f"P_d: undefined: {why}")
         if args.out:

@@ -6,7 +6,8 @@ import traceback
 
 import numpy as np
 
-from ..analysis import classify_motion, largest_lyapunov, mean_square, poincare_period, vibration_reduction
+from ..analysis import (classify_motion, harmonic_amplitudes, largest_lyapunov, mean_square, poincare_period,
+                        vibration_reduction)
 from ..config import apply_overrides, config_from_data
 from ..numeric.contract import C_EVENTS, N_COUNTERS, N_STATS, S_MAX_CONE_RATIO, STATUS_NAMES
 from ..numeric.kernels import make_integrator
@@ -65,7 +66,9 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
     dict
         ``poincare_x1``, ``poincare_vx1`` (SI, one per recorded period),
         ``length_scale``, ``period``, ``motion`` (code), ``lyapunov`` (1/period),
-        ``P``, ``P0``, ``Pd`` (percent), ``events``, ``final_state`` and, if asked,
+        ``P``, ``P0``, ``Pd`` (percent), ``events``, ``final_state``, ``harmonic1`` (the
+        first-harmonic amplitude of every coordinate and velocity over the recorded
+        periods: of the last ``history_periods`` when only those are kept) and, if asked,
         ``history_t``, ``history_x1``, ``history_vx1``; on failure only ``error``.
     """
     try:
@@ -79,7 +82,9 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
         hist = min(run.get("history_periods", 0), periods)
         want_pd = bool(run.get("vibration_reduction"))
         keep = periods if want_pd else hist  # periods recorded at every step
-        n_rec = keep * S + 1 if keep else 0
+        # otherwise a light record (about 64 samples a period) gives the first harmonics
+        every = 1 if keep else max(d for d in range(1, max(S // 64, 1) + 1) if S % d == 0)
+        n_rec = (keep if keep else periods) * (S // every) + 1
         rec = integ.record_buffer(n_rec)
         poinc = np.empty((periods, integ.n_state))
         counters = np.zeros(N_COUNTERS, dtype=np.int64)
@@ -90,7 +95,7 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
         if not status:
             status, mode, t = integ.advance(y, mode, transient, transient + periods, poincare=poinc,
                                             counters=counters, **extra,
-                                            n_transient=transient, record=rec if keep else None)
+                                            n_transient=transient, record=rec, record_every=every)
         if status:
             raise RuntimeError(f"integration failed at t = {t:.6g} s ({STATUS_NAMES.get(status, status)})")
         names = integ.state_names
@@ -98,6 +103,7 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
         n_phys = len(model.coordinates) * 2
         scale_len = model.length_scale or float("nan")
         out = {"poincare_x1": poinc[:, ix].copy(), "poincare_vx1": poinc[:, iv].copy(),
+               "harmonic1": harmonic_amplitudes(rec[1][:, :n_phys], S // every),
                "length_scale": scale_len, "period": poincare_period(poinc[:, :n_phys]),
                "events": int(counters[C_EVENTS]), "final_state": y.copy(),
                "max_cone_ratio": float(stats[S_MAX_CONE_RATIO]) if per_contact else float("nan")}

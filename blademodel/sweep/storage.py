@@ -39,7 +39,7 @@ from .errors import ResultFileError
 SCALARS = ("length_scale", "period", "motion", "lyapunov", "P", "P0", "Pd", "events", "max_cone_ratio")
 INTS = ("period", "motion", "events")
 #: Per-point arrays (a row per point).
-ARRAYS = ("poincare_x1", "poincare_vx1", "final_state", "history_t", "history_x1", "history_vx1")
+ARRAYS = ("poincare_x1", "poincare_vx1", "final_state", "harmonic1", "history_t", "history_x1", "history_vx1")
 LAW_CHARS, ERROR_CHARS, CHECKSUM_CHARS = 32, 400, 16
 FORMAT = "NETCDF3_64BIT_OFFSET"
 #: Value of the last variable, ``tail``: a file cut short reads 0 there.
@@ -109,6 +109,8 @@ def create(path: Path, *, study_json: str, fields: list[str], values: list[list]
         for name in ("poincare_x1", "poincare_vx1"):
             ds.createVariable(name, "f8", ("point", "sample"), fill_value=np.nan)
         ds.createVariable("final_state", "f8", ("point", "state"), fill_value=np.nan)
+        h1 = ds.createVariable("harmonic1", "f8", ("point", "state"), fill_value=np.nan)
+        h1.long_name = "first-harmonic amplitude of each coordinate and velocity over the recorded periods"
         if history:
             for name in ("history_t", "history_x1", "history_vx1"):
                 ds.createVariable(name, "f8", ("point", "time"), fill_value=np.nan)

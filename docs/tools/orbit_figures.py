@@ -33,11 +33,15 @@ def _report(label, b, t):
 
 
 def frf_pair():
-    """Both laws, omega from 200 to 1400 rad/s: the contact's resonance and the free blade's (1085 rad/s)."""
+    """Both laws, omega from 225 to 405 rad/s (the paper's 290 inside).
+
+    From 200 or up to 1400 rad/s the Coulomb branch stops at 222.30 and 411.30 rad/s (the
+    corrections stall at a scaled residual of 2e-5 and the step falls below ``ds_min``).
+    """
     fig = Figure(figsize=(9, 3.6))
     for j, law in enumerate(("coulomb", "bilinear")):
         t = time.process_time()
-        b = continuation(BladePair(friction=law), "omega", 200.0, 1400.0, ds_max=0.02, max_points=3000)
+        b = continuation(BladePair(friction=law), "omega", 225.0, 405.0, ds_max=0.02, max_points=3000)
         _report(f"pair, {law}", b, t)
         ax = fig.add_subplot(1, 2, j + 1)
         i = b.state_names.index("x1")
@@ -57,7 +61,6 @@ def frf_pair():
         ax.set_title(f"blade pair, {law} friction", fontsize=9)
         ax.set_xlabel("ω (rad/s)")
         ax.set_ylabel("first harmonic of x1 (µm)")
-        ax.set_yscale("log")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
     fig.tight_layout()
