@@ -205,3 +205,49 @@ def test_the_period_doubled_branch_of_the_bilinear_pair():
     assert status == 0
     back = full[:y2.size]
     assert min(np.max(np.abs(back - y2) / scale), np.max(np.abs(back - half) / scale)) < 1e-7
+
+
+def _sweep(cfg, values, periods=300):
+    """A warm-started brute-force sweep: events in the last period at each value (each from the last state)."""
+    from blademodel.config import apply_overrides
+    first, y, mode, events = None, None, None, []
+    for w in values:
+        model = apply_overrides(cfg, {"omega": float(w)}).build()
+        ig = make_integrator(model) if first is None else first.with_parameters(model)
+        first = first or ig
+        if y is None:
+            y = np.zeros(ig.n_state)
+            mode = ig.mode_of(y)
+        status, mode, _ = ig.advance(y, mode, 0, periods - 1)
+        c = np.zeros(8, dtype=np.int64)
+        status2, mode, _ = ig.advance(y, mode, 0, 1, counters=c)
+        assert status == status2 == 0
+        events.append(int(c[1]))
+    return np.array(events)
+
+
+def test_the_folds_of_a_hardening_contact_resonance_bound_the_hysteresis_of_sweeps():
+    """Frictionless pair, F0 = 0.5 N: the contact stiffens the tangential resonance, whose branch bends over.
+    Continuation finds its two folds. A warm-started sweep up (1 rad/s apart, 300 periods a value) leaves the
+    contact branch exactly between the sweep values around the upper fold. Going down (0.25 rad/s apart), the
+    contact-free orbit grazes the gap 0.04 rad/s above the lower fold: the sweep must have jumped onto the
+    contact branch by the first value below the fold, and not earlier than half a rad/s above the grazing (a
+    warm start's transient can touch the gap a little before the orbit itself does)."""
+    cfg = BladePair(friction="none", F0=0.5)
+    b = continuation(cfg, "omega", 1000.0, 2000.0, max_points=1500)
+    folds = sorted(p.param for p in b.points("fold"))
+    assert len(folds) == 2
+    low, high = folds
+    assert b.stable[0] and b.events[0] > 0 and b.events[-1] == 0
+    up = np.arange(np.floor(high) - 12, np.floor(high) + 6)
+    ev = _sweep(cfg, [1000.0, *np.linspace(1000.0, up[0], 60)[1:], *up])[-len(up):]
+    jump = np.flatnonzero(ev == 0)[0]
+    assert np.all(ev[:jump] > 0) and np.all(ev[jump:] == 0)
+    assert up[jump - 1] < high < up[jump]
+    grazing = min((p.param for p in b.points("grazing")), key=lambda g: abs(g - low))
+    assert 0 < grazing - low < 0.1
+    down = np.arange(np.ceil(low) + 5, np.ceil(low) - 3, -0.25)
+    ev = _sweep(cfg, [2000.0, *np.linspace(2000.0, down[0], 60)[1:], *down])[-len(down):]
+    jump = np.flatnonzero(ev > 0)[0]
+    assert np.all(ev[:jump] == 0) and np.all(ev[jump:] > 0)
+    assert low - 0.25 < down[jump] <= grazing + 0.5

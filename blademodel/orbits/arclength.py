@@ -265,9 +265,10 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
         The range of the field the new branch is followed in (it must contain the point).
     periods : int
         Period of the *old* branch; the new one has twice it.
-    ds, ds_min, ds_max, max_points, tol, max_corrections, rel_step, locate_tol, steps_per_period, event_tol,
-    method, kernel, jacobian, progress
+    ds, ds_min, ds_max, max_points, tol, max_corrections, rel_step, locate_tol : float
         As for :func:`continuation`; ``ds`` is also the switch's step along ``v``.
+    steps_per_period, event_tol, method, kernel, jacobian, progress
+        As for :func:`continuation`.
 
     Returns
     -------
