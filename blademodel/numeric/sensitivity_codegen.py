@@ -78,17 +78,36 @@ def sensitivity_source(system: HybridSystem) -> str:
 
     L.append("def guard_gradient(mode, gi, t, y, p, gy, gp):")
     L.append('    """``dg/dy`` and ``dg/dp`` of guard ``gi`` of ``mode`` into ``gy``, ``gp``; returns ``dg/dt`` (generated)."""')
+    def gradient(expr, indent):
+        entries = [(f"gy[{j}]", sp.diff(expr, s)) for j, s in enumerate(state)]
+        entries += [(f"gp[{j}]", sp.diff(expr, q)) for j, q in enumerate(params)]
+        entries.append(("gt", sp.diff(expr, t)))
+        pad = " " * indent
+        return [f"{pad}gt = 0.0", *_fill(entries, pr, indent, "x"), f"{pad}return gt"]
+
     first = True
     for m, mode in enumerate(system.modes):
         for gi, g in enumerate(mode.guards):
             L.append(f"    {'if' if first else 'elif'} mode == {m} and gi == {gi}:")
             first = False
-            entries = [(f"gy[{j}]", sp.diff(g.expr, s)) for j, s in enumerate(state)]
-            entries += [(f"gp[{j}]", sp.diff(g.expr, q)) for j, q in enumerate(params)]
-            entries.append(("gt", sp.diff(g.expr, t)))
-            L.append("        gt = 0.0")
-            L += _fill(entries, pr, 8, "x")
-            L.append("        return gt")
+            if isinstance(g.expr, (sp.Min, sp.Max)):
+                # a guard that is the least (greatest) of several, e.g. the first of an Iwan
+                # law's elements to slip: the gradient of the argument that is active here
+                # (SymPy's own derivative of Min weighs tied arguments by Heaviside(0) = 1/2)
+                args = list(g.expr.args)
+                L += _block(args, [f"a_{k}" for k in range(len(args))], pr, 8, "v")
+                L.append("        j = 0")
+                L.append("        best = a_0")
+                cmp = "<" if isinstance(g.expr, sp.Min) else ">"
+                for k in range(1, len(args)):
+                    L.append(f"        if a_{k} {cmp} best:")
+                    L.append(f"            j = {k}")
+                    L.append(f"            best = a_{k}")
+                for k, a in enumerate(args):
+                    L.append(f"        {'if' if k == 0 else 'elif'} j == {k}:")
+                    L += gradient(a, 12)
+            else:
+                L += gradient(g.expr, 8)
     L.append("    return 0.0")
     L.append("")
 

@@ -194,7 +194,7 @@ def reset_tangent(mode, gi, target, t, y, p, V, dt, use_p, dp, Ry, Rp, Rt, ytmp,
     return new_mode
 
 
-def replay_tangent(y, mode, p, period, steps_per_period, start_period, end_period, tab, log_t, log_guard,
+def replay_tangent(y, mode, p, period, steps_per_period, start_period, end_period, tab, ktab, log_t, log_guard,
                    log_from, log_to, n_log, V, use_p, dp, dperiod):
     """Repeat the kernel's run over periods ``start_period .. end_period`` from its log, carrying ``V``.
 
@@ -202,7 +202,11 @@ def replay_tangent(y, mode, p, period, steps_per_period, start_period, end_perio
     place. The step grid is the kernel's (``h = period / steps_per_period``); inside
     a step, the sub-steps end at the logged event times, where the logged
     transitions are taken. ``dperiod`` is the period's derivative along ``dp``: the
-    grid times move with it. Returns ``(status, mode, t)``.
+    grid times move with it. ``tab`` is the method's tableau for the tangent; the state
+    itself is stepped as the kernel steps it (``ktab``: empty for the fused RK4), so that
+    it follows the kernel's rounding and a reset that decides on a guard's sign right at
+    its root (which of an Iwan law's elements slip) decides as the kernel did.
+    Returns ``(status, mode, t)``.
     """
     N = y.shape[0]
     n = V.shape[0]
@@ -225,6 +229,13 @@ def replay_tangent(y, mode, p, period, steps_per_period, start_period, end_perio
     Rt = np.empty(n)
     ytmp = np.empty(N)
     W = np.empty((n, m))
+    k1 = np.empty(N)
+    k2 = np.empty(N)
+    k3 = np.empty(N)
+    k4 = np.empty(N)
+    tmp = np.empty(N)
+    sk = int(round(math.sqrt(ktab.shape[0] + 1.0))) - 1 if ktab.shape[0] > 0 else 0
+    KK = np.empty((sk, N))
     dt = np.zeros(m)      # d t / d (y0, lambda) of the current time
     dt_b = np.zeros(m)
     h = period / steps_per_period
@@ -240,6 +251,10 @@ def replay_tangent(y, mode, p, period, steps_per_period, start_period, end_perio
                 te = log_t[ie] if event else t_end
                 if te > t:
                     tangent_step(mode, t, y, te - t, p, tab, V, use_p, dp, K, Y, dK, dY, Jy, Jp, Jt, y1, V1)
+                    if ktab.shape[0] == 0:
+                        rk4_step(mode, t, y, te - t, p, k1, k2, k3, k4, tmp, y1)  # noqa: F821
+                    else:
+                        rk_step(mode, t, y, te - t, p, k1, k2, k3, k4, tmp, y1, ktab, KK)  # noqa: F821
                     for i in range(N):
                         y[i] = y1[i]
                     if event:
