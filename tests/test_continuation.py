@@ -251,3 +251,31 @@ def test_the_folds_of_a_hardening_contact_resonance_bound_the_hysteresis_of_swee
     jump = np.flatnonzero(ev > 0)[0]
     assert np.all(ev[:jump] == 0) and np.all(ev[jump:] > 0)
     assert low - 0.25 < down[jump] <= grazing + 0.5
+
+
+def test_a_branch_plot_overlaid_on_a_sweep(tmp_path, capsys):
+    """``continue --overlay``: a sweep's stored first harmonics drawn on the branch plot; at the branch's first
+    value (gamma = 7.2, period 1 only) the sweep's amplitude from rest equals the branch's to 1e-6; a sweep of
+    another field is refused before any continuation, naming the fields it did vary."""
+    import json
+    from pathlib import Path
+
+    from blademodel.cli import main
+    from blademodel.commands.continue_ import sweep_overlay
+    study = tmp_path / "study.yaml"
+    study.write_text("name: g\nbase: {model: blade_pair, friction: bilinear}\nsweep:\n"
+                     "  gamma: {start: 7.2, stop: 7.5, num: 4}\nrun: {transient: 600, periods: 4}\n")
+    nc = tmp_path / "g.nc"
+    assert main(["sweep", str(study), "--out", str(nc), "--workers", "1", "--no-plot"]) == 0
+    capsys.readouterr()
+    yaml = str(Path(__file__).resolve().parent.parent / "models" / "blade_pair_bilinear.yaml")
+    png = tmp_path / "b.png"
+    assert main(["continue", yaml, "--param", "gamma", "--from", "7.2", "--to", "7.5", "--json",
+                 "--plot", str(png), "--overlay", str(nc)]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    values, h = sweep_overlay(nc, "gamma", 0)
+    assert len(values) == 4 and png.stat().st_size > 0
+    assert abs(h[0] - rep["harmonic1"][0]) < 1e-6 * rep["harmonic1"][0]
+    assert main(["continue", yaml, "--param", "F0", "--from", "50", "--to", "60", "--plot", str(png),
+                 "--overlay", str(nc)]) == 2
+    assert "did not vary 'F0'" in capsys.readouterr().err

@@ -39,6 +39,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--quantity", choices=("harmonic", "amplitude", "section"), default="harmonic",
                    help="what --plot draws: first-harmonic amplitude (an FRF, default), half the peak-to-peak "
                         "excursion, or the Poincare samples (a bifurcation diagram)")
+    p.add_argument("--overlay", metavar="SWEEP.nc",
+                   help="draw the first harmonics of a brute-force sweep of the same field (a 'blademodel sweep' "
+                        "result file) on --plot, as dots")
     p.add_argument("--state", default=None, help="state plotted and reported (default: the first coordinate)")
     p.add_argument("--out", metavar="FILE.nc", help="write the branch (NetCDF)")
     p.add_argument("--plot", metavar="FILE.png", help="draw the branch (stable solid, unstable dashed)")
@@ -54,6 +57,31 @@ def _progress(point: int, value: float) -> None:
         print(f"point {point}: {value:.6g}", file=sys.stderr)
 
 
+def sweep_overlay(path, field: str, state_index: int, law: str | None = None) -> tuple:
+    """``(values, first-harmonic amplitudes)`` of ``state_index`` from a sweep result file over ``field``.
+
+    Only the finished, successful points; with several laws in the file, those of ``law``.
+
+    Raises
+    ------
+    ValueError
+        If the file did not sweep ``field`` or holds no first harmonics (written before they were stored).
+    """
+    from ..sweep.runner import open_result
+    ds = open_result(path)
+    if f"param_{field}" not in ds:
+        raise ValueError(f"--overlay {path}: the sweep did not vary {field!r} (it varied "
+                         f"{', '.join(ds.attrs['fields'])})")
+    if "harmonic1" not in ds:
+        raise ValueError(f"--overlay {path}: the file holds no first harmonics (written by an older blademodel); "
+                         f"run the sweep again")
+    ok = (ds["done"].values == 1) & (ds["error"].values == "")
+    laws = set(ds["law"].values[ok])
+    if law is not None and len(laws) > 1:
+        ok &= ds["law"].values == law
+    return ds[f"param_{field}"].values[ok], ds["harmonic1"].values[ok, state_index]
+
+
 def run(args: argparse.Namespace) -> int:
     """Continue the branch; return the exit code."""
     for name in ("period", "max_points", "steps_per_period"):
@@ -65,6 +93,12 @@ def run(args: argparse.Namespace) -> int:
         check_output_file(args.out, ".nc", what="NetCDF file")
     if args.plot:
         check_output_file(args.plot, ".png", option="--plot", what="PNG image")
+    if args.overlay:
+        if not args.plot:
+            raise ValueError("--overlay draws on the plot: give --plot FILE.png too")
+        if args.quantity != "harmonic":
+            raise ValueError("--overlay holds first harmonics: use it with --quantity harmonic")
+        sweep_overlay(args.overlay, args.param, 0)   # the file's checks, before the continuation
     config = apply_overrides(load_config(args.model), parse_overrides(args.overrides))
     try:
         config.build()
@@ -109,8 +143,12 @@ def run(args: argparse.Namespace) -> int:
                 doubled_files.append(name)
     if args.plot:
         from ..plots.branch import branch_figure
+        overlay = None
+        if args.overlay:
+            overlay = sweep_overlay(args.overlay, args.param, branch.state_names.index(state),
+                                    getattr(config, "friction", None))
         branch_figure([branch, *[b for b in doubled if b is not None]], state,
-                      quantity=args.quantity).savefig(args.plot, dpi=120)
+                      quantity=args.quantity, overlay=overlay).savefig(args.plot, dpi=120)
     i = branch.state_names.index(state)
     rep = {"field": branch.field, "periods": branch.periods, "points": len(branch.params),
            "message": branch.message, "values": branch.params.tolist(),

@@ -82,8 +82,8 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
         hist = min(run.get("history_periods", 0), periods)
         want_pd = bool(run.get("vibration_reduction"))
         keep = periods if want_pd else hist  # periods recorded at every step
-        # otherwise a light record (about 64 samples a period) gives the first harmonics
-        every = 1 if keep else max(d for d in range(1, max(S // 64, 1) + 1) if S % d == 0)
+        # otherwise a lighter record (at least 256 samples a period) gives the first harmonics
+        every = 1 if keep else max(d for d in range(1, max(S // 256, 1) + 1) if S % d == 0)
         n_rec = (keep if keep else periods) * (S // every) + 1
         rec = integ.record_buffer(n_rec)
         poinc = np.empty((periods, integ.n_state))
