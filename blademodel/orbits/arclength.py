@@ -432,7 +432,16 @@ class _Context:
             mode = _copy(mode_end)
         Xc = np.append(y / self.scale, X[-1])
         self.iterations = self.max_corrections // 2
-        return Xc, mode, self.jacobian(Xc, mode)
+        A = self._jacobian_at(Xc, mode)
+        return (Xc, mode, A) if A is not None else (None, mode, None)
+
+    def _jacobian_at(self, X, mode):
+        """:meth:`jacobian` at a corrected point, or None (with ``why``) where a perturbed integration fails."""
+        try:
+            return self.jacobian(X, mode)
+        except (FlowError, ValueError) as e:
+            self.why = f"the Jacobian at the corrected point: {e}"
+            return None
 
     def rescale(self, scale, X, T, A):
         """``X``, the tangent ``T`` and the Jacobian ``A`` in the state scale ``scale`` (was ``self.scale``)."""
@@ -517,7 +526,10 @@ class _Context:
                 continue
             self.iterations = it
             if _same(mode_end, mode):
-                return Xc, mode, self.jacobian(Xc, mode)
+                A = self._jacobian_at(Xc, mode)
+                if A is None:
+                    continue
+                return Xc, mode, A
             if (_key(mode_end), False) not in tried:
                 tries.append((_copy(mode_end), False))
             self.why = "the orbit's mode at the section keeps changing (it switches exactly there)"
