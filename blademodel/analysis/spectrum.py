@@ -5,6 +5,17 @@ from __future__ import annotations
 import numpy as np
 
 
+def _whole_periods(x, samples_per_period: int):
+    """``x`` without its closing sample, the samples per period and the number of periods ``K``."""
+    x = np.asarray(x, dtype=float)
+    S = int(samples_per_period)
+    if len(x) % S == 1:
+        x = x[:-1]
+    if len(x) % S or len(x) == 0:
+        raise ValueError(f"{len(x)} samples are not a whole number of periods of {S} samples")
+    return x, S, len(x) // S
+
+
 def amplitude_spectrum(x, samples_per_period: int) -> tuple[np.ndarray, np.ndarray]:
     """One-sided amplitude spectrum of a signal sampled on whole excitation periods.
 
@@ -24,13 +35,7 @@ def amplitude_spectrum(x, samples_per_period: int) -> tuple[np.ndarray, np.ndarr
         Amplitude of each harmonic, in the units of ``x`` (the mean at ``k = 0``).
         A component ``A cos(2 pi f t + phi)`` with ``f / f_e = k / K`` shows ``A``.
     """
-    x = np.asarray(x, dtype=float)
-    S = int(samples_per_period)
-    if len(x) % S == 1:
-        x = x[:-1]
-    if len(x) % S or len(x) == 0:
-        raise ValueError(f"{len(x)} samples are not a whole number of periods of {S} samples")
-    K = len(x) // S
+    x, S, K = _whole_periods(x, samples_per_period)
     X = np.fft.rfft(x) / len(x)
     amp = 2 * np.abs(X)
     amp[0] /= 2
@@ -58,13 +63,7 @@ def harmonic_amplitudes(Y, samples_per_period: int, k: int = 1) -> np.ndarray:
         One amplitude per column: a column ``A cos(k w t + phi) + ...`` gives ``A``.
     """
     Y = np.asarray(Y, dtype=float)
-    Y = Y[:, None] if Y.ndim == 1 else Y
-    S = int(samples_per_period)
-    if len(Y) % S == 1:
-        Y = Y[:-1]
-    if len(Y) % S or len(Y) == 0:
-        raise ValueError(f"{len(Y)} samples are not a whole number of periods of {S} samples")
-    K = len(Y) // S
+    Y, S, K = _whole_periods(Y[:, None] if Y.ndim == 1 else Y, samples_per_period)
     if not 0 < k < S / 2:
         raise ValueError(f"harmonic k = {k} must lie between 1 and half the samples per period ({S})")
     n = np.arange(len(Y))

@@ -24,8 +24,8 @@ from .compiled import _load, cache_dir, derive_cached, hash_sources, PACKAGE
 from .contract import C_LOGGED, N_COUNTERS, STATUS_NAMES
 from .methods import get_method
 
-_TEMPLATE_FUNCTIONS = ("flow_jacobian", "guard_gradient", "reset_jacobian", "tangent_step", "step_tangent",
-                       "event_time_tangent", "reset_tangent", "replay_tangent")
+_TEMPLATE_FUNCTIONS = ("flow_jacobian", "guard_gradient", "reset_jacobian", "tangent_step", "tangent_sum",
+                       "step_tangent", "event_time_tangent", "reset_tangent", "replay_tangent")
 
 
 class SensitivityError(RuntimeError):

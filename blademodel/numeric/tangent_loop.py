@@ -51,29 +51,12 @@ def tangent_step(mode, t, y, h, p, tab, V, use_p, dp, K, Y, dK, dY, Jy, Jp, Jt, 
     differentiated with the mode's Jacobians.
     """
     s = K.shape[0]
-    N = y.shape[0]
     n = V.shape[0]
     m = V.shape[1]
     mm = m + 2
     npar = Jp.shape[1]
     for st in range(s):
-        for i in range(N):
-            Y[i] = y[i]
-        for i in range(n):
-            for c in range(m):
-                dY[i, c] = V[i, c]
-            dY[i, m] = 0.0
-            dY[i, m + 1] = 0.0
-        for q in range(st):
-            aq = tab[st * s + q]
-            if aq != 0.0:
-                a = h * aq
-                for i in range(N):
-                    Y[i] += a * K[q, i]
-                for i in range(n):
-                    for c in range(mm):
-                        dY[i, c] += a * dK[q, i, c]
-                    dY[i, m + 1] += aq * K[q, i]
+        tangent_sum(y, V, h, tab, st * s, st, K, dK, Y, dY)
         ct = tab[s * s + s + st]
         tc = t + ct * h
         rhs(mode, tc, Y, p, K[st])  # noqa: F821
@@ -97,6 +80,18 @@ def tangent_step(mode, t, y, h, p, tab, V, use_p, dp, K, Y, dK, dY, Jy, Jp, Jt, 
                 dK[st, i, m - 1] += acc
             dK[st, i, m] += Jt[i]
             dK[st, i, m + 1] += ct * Jt[i]
+    tangent_sum(y, V, h, tab, s * s, s, K, dK, out_y, out_V)
+
+
+def tangent_sum(y, V, h, tab, o, count, K, dK, out_y, out_V):
+    """``out_y = y + h sum_q w_q k_q`` (``w_q = tab[o + q]``, ``q < count``) and its derivatives.
+
+    ``out_V``'s first ``m`` columns are ``V + h sum_q w_q dk_q``, the next one (the start
+    time's) ``h sum_q w_q dk_q`` and the last (the length's) ``sum_q w_q k_q + h sum_q w_q dk_q``.
+    """
+    N = y.shape[0]
+    n = V.shape[0]
+    m = V.shape[1]
     for i in range(N):
         out_y[i] = y[i]
     for i in range(n):
@@ -104,16 +99,16 @@ def tangent_step(mode, t, y, h, p, tab, V, use_p, dp, K, Y, dK, dY, Jy, Jp, Jt, 
             out_V[i, c] = V[i, c]
         out_V[i, m] = 0.0
         out_V[i, m + 1] = 0.0
-    for q in range(s):
-        bq = tab[s * s + q]
-        if bq != 0.0:
-            b = h * bq
+    for q in range(count):
+        wq = tab[o + q]
+        if wq != 0.0:
+            w = h * wq
             for i in range(N):
-                out_y[i] += b * K[q, i]
+                out_y[i] += w * K[q, i]
             for i in range(n):
-                for c in range(mm):
-                    out_V[i, c] += b * dK[q, i, c]
-                out_V[i, m + 1] += bq * K[q, i]
+                for c in range(m + 2):
+                    out_V[i, c] += w * dK[q, i, c]
+                out_V[i, m + 1] += wq * K[q, i]
 
 
 def step_tangent(out_V, dt_a, dt_b, V):
