@@ -169,3 +169,31 @@ def test_a_wrong_parameter_direction_is_refused():
     _, ig, y, mode = _settled("coulomb")
     with pytest.raises(ValueError, match="one entry per raw parameter"):
         flow_sensitivity(ig, y, mode, 1, dp=np.ones(3))
+
+
+def test_a_start_past_a_guard_is_settled_and_differentiated_through_its_reset():
+    """A closed-contact state given in the open mode: the period map first closes the contact (the Jenkins
+    slider reset to zero, ``settle``), so the map does not depend on the given slider state. The tangent carries
+    that reset's Jacobian: it equals central differences of the settled map to 1e-6, and its slider column is
+    zero."""
+    _, ig, y, mode = _settled("bilinear")
+    P = PeriodMap(ig, 1, jacobian="tangent")
+    g = np.empty(ig.module.GUARD_DIR.shape[1] + 1)
+    # a point of the orbit where the contact is closed, given as "open"
+    rec = ig.record_buffer(ig.steps_per_period + 1)
+    full = np.zeros(ig.n_state)
+    full[:y.size] = y
+    ig.advance(full, mode, 0, 1, n_transient=0, record=rec)
+    for k in range(ig.steps_per_period):
+        ig.module.guards(0, rec[0][k], rec[1][k], ig.p, g)
+        if rec[2][k] != 0 and g[0] > 1e-7:
+            break
+    else:
+        pytest.fail("the orbit never closes its contact")
+    y_closed = rec[1][k, :ig.n_physical].copy()
+    y_closed[ig.meta["state"].index("z")] = 1e-7          # a slider state the closing reset discards
+    s = P.derivatives(y_closed, 0)
+    sc = np.maximum(np.abs(y_closed), 1e-3 * np.max(np.abs(y_closed)))
+    D = P.differences(y_closed, 0, sc, 1e-5)
+    assert np.max(np.abs(s.monodromy - D)) < 1e-6 * np.max(np.abs(s.monodromy))
+    assert np.all(s.monodromy[:, ig.meta["state"].index("z")] == 0.0)
