@@ -69,10 +69,12 @@ def tangent_step(mode, t, y, h, p, tab, V, use_p, dp, K, Y, dK, dY, Jy, Jp, Jt, 
         flow_jacobian(mode, tc, Y, p, Jy, Jp, Jt)  # noqa: F821
         for i in range(n):
             for c in range(mm):
-                acc = 0.0
-                for k in range(n):
-                    acc += Jy[i, k] * dY[k, c]
-                dK[st, i, c] = acc
+                dK[st, i, c] = 0.0
+            for k in range(n):
+                jik = Jy[i, k]
+                if jik != 0.0:   # mechanical Jacobians are sparse: dx/dt = v alone fills a row with one entry
+                    for c in range(mm):
+                        dK[st, i, c] += jik * dY[k, c]
             if use_p:
                 acc = 0.0
                 for j in range(npar):
