@@ -17,6 +17,39 @@ def add_model_arguments(parser: argparse.ArgumentParser) -> None:
                              "(repeatable)")
 
 
+def add_stepping_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add ``--steps-per-period``, ``--method`` and ``--event-tol`` (the integrator's settings)."""
+    parser.add_argument("--steps-per-period", type=int, default=1000, metavar="S",
+                        help="steps per excitation period (default 1000)")
+    parser.add_argument("--method", choices=("rk4", "rk8"), default="rk4",
+                        help="stepping method: classical RK4 (default) or an eighth-order Runge-Kutta method")
+    parser.add_argument("--event-tol", type=float, default=1e-10, metavar="E",
+                        help="event bracket, as a fraction of the step (default 1e-10)")
+
+
+def check_at_least_one(args: argparse.Namespace, names) -> None:
+    """``ValueError`` naming the first option of ``names`` (attribute names) below 1."""
+    for name in names:
+        if getattr(args, name) < 1:
+            raise ValueError(f"--{name.replace('_', '-')} must be at least 1, got {getattr(args, name)}")
+
+
+def config_and_model(args: argparse.Namespace):
+    """The config of ``args.model`` with ``--set`` applied, and its built model.
+
+    Raises
+    ------
+    ConfigError
+        Naming the file, where the config is valid field by field but cannot be built.
+    """
+    from ..config import apply_overrides, load_config
+    config = apply_overrides(load_config(args.model), parse_overrides(args.overrides))
+    try:
+        return config, config.build()
+    except ValueError as e:
+        raise ConfigError(f"{args.model}: {e}", path=str(args.model)) from None
+
+
 def parse_overrides(items: list[str]) -> dict[str, str]:
     """``["gamma=5"]`` -> ``{"gamma": "5"}``.
 

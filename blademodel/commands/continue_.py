@@ -7,10 +7,9 @@ import sys
 
 import numpy as np
 
-from ..config import ConfigError, apply_overrides, load_config
 from ..orbits import FlowError, ShootingError, continuation, period_doubled_branch
 from . import jsonout
-from .common import add_model_arguments, parse_overrides
+from .common import add_model_arguments, add_stepping_arguments, check_at_least_one, config_and_model
 from .output import check_output_file
 
 
@@ -30,9 +29,7 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="periods from rest for the first guess (default 20)")
     p.add_argument("--max-points", type=int, default=400, metavar="K", help="points at most (default 400)")
     p.add_argument("--ds-max", type=float, default=0.05, help="largest arclength step (default 0.05)")
-    p.add_argument("--steps-per-period", type=int, default=1000, metavar="S",
-                   help="steps per excitation period (default 1000)")
-    p.add_argument("--method", choices=("rk4", "rk8"), default="rk4", help="stepping method (default rk4)")
+    add_stepping_arguments(p)
     p.add_argument("--switch", action="store_true",
                    help="also follow the period-doubled branch born at each period doubling found "
                         "(saved beside --out as FILE_pd1.nc, ...; drawn on the same --plot)")
@@ -84,9 +81,7 @@ def sweep_overlay(path, field: str, state_index: int, law: str | None = None) ->
 
 def run(args: argparse.Namespace) -> int:
     """Continue the branch; return the exit code."""
-    for name in ("period", "max_points", "steps_per_period"):
-        if getattr(args, name) < 1:
-            raise ValueError(f"--{name.replace('_', '-')} must be at least 1, got {getattr(args, name)}")
+    check_at_least_one(args, ("period", "max_points", "steps_per_period"))
     if args.start == args.stop:
         raise ValueError(f"--from and --to must differ, got {args.start:g} twice")
     if args.out:
@@ -99,15 +94,12 @@ def run(args: argparse.Namespace) -> int:
         if args.quantity != "harmonic":
             raise ValueError("--overlay holds first harmonics: use it with --quantity harmonic")
         sweep_overlay(args.overlay, args.param, 0)   # the file's checks, before the continuation
-    config = apply_overrides(load_config(args.model), parse_overrides(args.overrides))
-    try:
-        config.build()
-    except ValueError as e:
-        raise ConfigError(f"{args.model}: {e}", path=str(args.model)) from None
+    config, _ = config_and_model(args)
     try:
         branch = continuation(config, args.param, args.start, args.stop, periods=args.period,
                               transient=args.transient, max_points=args.max_points, ds_max=args.ds_max,
-                              steps_per_period=args.steps_per_period, method=args.method, progress=_progress)
+                              steps_per_period=args.steps_per_period, event_tol=args.event_tol, method=args.method,
+                              progress=_progress)
     except (ShootingError, FlowError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
@@ -119,7 +111,8 @@ def run(args: argparse.Namespace) -> int:
             try:
                 doubled.append(period_doubled_branch(
                     config, args.param, pd, args.start, args.stop, periods=args.period, max_points=args.max_points,
-                    ds_max=args.ds_max, steps_per_period=args.steps_per_period, method=args.method,
+                    ds_max=args.ds_max, steps_per_period=args.steps_per_period, event_tol=args.event_tol,
+                    method=args.method,
                     progress=_progress))
             except (ShootingError, FlowError) as e:
                 print(f"warning: no switch at the period doubling {k} ({args.param} = {pd.param:.6g}): {e}",

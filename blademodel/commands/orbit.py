@@ -7,12 +7,11 @@ import sys
 
 import numpy as np
 
-from ..config import ConfigError, apply_overrides, load_config
 from ..numeric import SimulationError
 from ..numeric.kernels import make_integrator
 from ..orbits import FlowError, ShootingError, find_periodic_orbit
 from . import jsonout
-from .common import add_model_arguments, parse_overrides
+from .common import add_model_arguments, add_stepping_arguments, check_at_least_one, config_and_model
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -29,20 +28,14 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="periods from rest before the first Newton step (default 20)")
     p.add_argument("--tol", type=float, default=1e-10, help="scaled residual to reach (default 1e-10)")
     p.add_argument("--max-iter", type=int, default=30, metavar="K", help="Newton steps allowed (default 30)")
-    p.add_argument("--steps-per-period", type=int, default=1000, metavar="S",
-                   help="steps per excitation period (default 1000)")
-    p.add_argument("--method", choices=("rk4", "rk8"), default="rk4", help="stepping method (default rk4)")
-    p.add_argument("--event-tol", type=float, default=1e-10, metavar="E",
-                   help="event bracket, as a fraction of the step (default 1e-10)")
+    add_stepping_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=run)
     return p
 
 
 def _check(args) -> None:
-    for name in ("periods", "max_iter", "steps_per_period"):
-        if getattr(args, name) < 1:
-            raise ValueError(f"--{name.replace('_', '-')} must be at least 1, got {getattr(args, name)}")
+    check_at_least_one(args, ("periods", "max_iter", "steps_per_period"))
     if args.transient < 0:
         raise ValueError(f"--transient must be >= 0, got {args.transient}")
     if not args.tol > 0:
@@ -68,11 +61,7 @@ def report(orbit, mode_name: str) -> dict:
 def run(args: argparse.Namespace) -> int:
     """Find the orbit; return the exit code."""
     _check(args)
-    config = apply_overrides(load_config(args.model), parse_overrides(args.overrides))
-    try:
-        model = config.build()
-    except ValueError as e:
-        raise ConfigError(f"{args.model}: {e}", path=str(args.model)) from None
+    _, model = config_and_model(args)
     ig = make_integrator(model, steps_per_period=args.steps_per_period, event_tol=args.event_tol,
                          method=args.method)
     try:

@@ -10,11 +10,10 @@ import numpy as np
 
 from ..analysis import mean_square, periodicity_label, vibration_reduction
 from ..numeric.mean_square import mean_square_run, without_contacts
-from ..config import ConfigError, apply_overrides, load_config
 from ..numeric import SimulationError, simulate
 from ..numeric.limits import check_run_length
 from . import jsonout
-from .common import add_model_arguments, parse_overrides
+from .common import add_model_arguments, add_stepping_arguments, config_and_model
 from .output import check_output_file
 
 
@@ -26,12 +25,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     add_model_arguments(p)
     p.add_argument("--transient", type=int, default=200, metavar="M", help="periods discarded (default 200)")
     p.add_argument("--periods", type=int, default=100, metavar="N", help="periods recorded (default 100)")
-    p.add_argument("--steps-per-period", type=int, default=1000, metavar="S",
-                   help="steps per excitation period (default 1000)")
-    p.add_argument("--method", choices=("rk4", "rk8"), default="rk4",
-                   help="stepping method: classical RK4 (default) or an eighth-order Runge-Kutta method")
-    p.add_argument("--event-tol", type=float, default=1e-10, metavar="E",
-                   help="event bracket, as a fraction of the step (default 1e-10)")
+    add_stepping_arguments(p)
     p.add_argument("--record-every", type=int, default=1, metavar="K",
                    help="record the state every K steps (default 1; Poincare samples are always kept)")
     p.add_argument("--kernel", choices=("auto", "product", "contact"), default="auto",
@@ -138,11 +132,7 @@ def _save(path: str, result, report_json: str) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the simulation; return the exit code."""
-    config = apply_overrides(load_config(args.model), parse_overrides(args.overrides))
-    try:
-        model = config.build()
-    except ValueError as e:
-        raise ConfigError(f"{args.model}: {e}", path=str(args.model)) from None
+    config, model = config_and_model(args)
     _check_up_front(model, args)
     try:
         result = simulate(model, periods=args.periods, transient=args.transient,

@@ -12,7 +12,7 @@ from ..model import Model
 from .compiled import compile_model
 from .contract import N_COUNTERS
 from .methods import get_method
-from .stability import check_step, max_stable_step, physical_eigenvalues
+from .stability import check_step, max_stable_step, step_is_stable
 
 
 
@@ -292,10 +292,8 @@ class HybridIntegrator(Integrator):
         if self._check_stability:
             # the step itself inside the stability region in every mode settles it; the limit
             # (a bisection on each eigenvalue's ray) is only needed for the error message
-            h = new.period / new.steps_per_period
-            lam = np.concatenate([physical_eigenvalues(self.module.jacobian(m, new.p_raw)[:self.n_physical, :self.n_physical])
-                                  for m in range(len(self.meta["modes"]))])
-            if not np.all(np.abs(self.method.amplification(h * lam)) <= 1.0 + 1e-12):
+            if not step_is_stable(new.period / new.steps_per_period, self.module.jacobian, len(self.meta["modes"]),
+                                  new.p_raw, self.n_physical, self.method.amplification):
                 new._check_step()
         return new
 

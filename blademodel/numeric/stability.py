@@ -66,16 +66,26 @@ def max_stable_step(jacobian, n_modes: int, p: np.ndarray, n_state: int,
     amplification : callable
         The method's stability function (default RK4's).
     """
-    lams, owner = [], []
-    for mode in range(n_modes):
-        lam = physical_eigenvalues(jacobian(mode, p)[:n_state, :n_state])
-        lams.append(lam)
-        owner.append(np.full(lam.size, mode))
-    if not lams or not sum(lam.size for lam in lams):
+    lam, owner = mode_eigenvalues(jacobian, n_modes, p, n_state)
+    if not lam.size:
         return math.inf, -1
-    limits = ray_limits(np.concatenate(lams), amplification)   # every mode's rays in one bisection
+    limits = ray_limits(lam, amplification)   # every mode's rays in one bisection
     i = int(np.argmin(limits))
-    return (float(limits[i]), int(np.concatenate(owner)[i])) if math.isfinite(limits[i]) else (math.inf, -1)
+    return (float(limits[i]), int(owner[i])) if math.isfinite(limits[i]) else (math.inf, -1)
+
+
+def mode_eigenvalues(jacobian, n_modes: int, p: np.ndarray, n_state: int) -> tuple[np.ndarray, np.ndarray]:
+    """The :func:`physical_eigenvalues` of every mode's Jacobian, and the mode each belongs to."""
+    lams = [physical_eigenvalues(jacobian(mode, p)[:n_state, :n_state]) for mode in range(n_modes)]
+    owner = [np.full(lam.size, mode) for mode, lam in enumerate(lams)]
+    return np.concatenate(lams or [np.zeros(0)]), np.concatenate(owner or [np.zeros(0, dtype=int)])
+
+
+def step_is_stable(h: float, jacobian, n_modes: int, p: np.ndarray, n_state: int,
+                   amplification=rk4_amplification) -> bool:
+    """Whether ``|R(h lam)| <= 1`` for every mode's eigenvalues: one evaluation, no limit sought."""
+    lam = mode_eigenvalues(jacobian, n_modes, p, n_state)[0]
+    return bool(np.all(np.abs(amplification(h * lam)) <= 1.0 + 1e-12))
 
 
 def check_step(period: float, steps_per_period: int, h_max: float, mode_name: str, method: str = "rk4") -> None:

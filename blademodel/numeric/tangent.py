@@ -86,9 +86,12 @@ def sensitivity_module(integrator) -> ModuleType:
     return _MODULES[compiled.path]
 
 
+_RK4_TABLEAU = get_method("rk4").tableau()
+
+
 def _tableau(integrator) -> np.ndarray:
     """The integrator's method as a tableau (its fused classical RK4 as RK4's)."""
-    return integrator._tableau if integrator._tableau.size else get_method("rk4").tableau()
+    return integrator._tableau if integrator._tableau.size else _RK4_TABLEAU
 
 
 def flow_sensitivity(integrator, y, mode: int, periods: int = 1, *, dp=None, dperiod: float = 0.0,

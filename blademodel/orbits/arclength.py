@@ -299,7 +299,8 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
         full[:y.size] = y
         mode = ig.mode_of(full)
     scale = _state_scale(_orbit_samples(ig, y, mode, 2 * periods)[1], _n_coordinates(ig))
-    J1 = PeriodMap(ig, periods, jacobian).jacobian(y, _copy(mode), scale, rel_step)
+    old = PeriodMap(ig, periods, jacobian)   # the period-``periods`` map
+    J1 = old.jacobian(y, _copy(mode), scale, rel_step)
     mu, V = np.linalg.eig(J1)
     k = int(np.argmin(np.abs(mu + 1.0)))
     v = np.real(V[:, k]) / scale
@@ -307,10 +308,9 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
     ctx = _Context(fam, scale, span, tol, rel_step, max_corrections)
     X0 = np.append(y / scale, point.param / span)
     A0 = ctx.jacobian(X0, mode)
-    old = PeriodMap(ig, periods, jacobian)
-    for sign in (1.0, -1.0, 2.0, -2.0):
-        T0 = np.append(sign * v, 0.0) / abs(sign)
-        X1, m1, A1 = ctx.correct(X0 + abs(sign) * ds * T0, T0, _copy(mode))
+    for sign, h in ((1.0, ds), (-1.0, ds), (1.0, 2 * ds), (-1.0, 2 * ds)):
+        T0 = np.append(sign * v, 0.0)
+        X1, m1, A1 = ctx.correct(X0 + h * T0, T0, _copy(mode))
         if X1 is None:
             continue
         y1 = X1[:-1] * scale
@@ -328,8 +328,7 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
                    locate_tol=locate_tol, progress=progress)
 
 
-def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, locate_tol, progress,
-            special=None) -> Branch:
+def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, locate_tol, progress) -> Branch:
     """Continue from the last point ``pts[-1]`` (unknowns ``X``, tangent ``T``) until the field leaves ``bounds``."""
     fam, span = ctx.fam, ctx.span
     name, periods = fam.name, fam.periods
@@ -337,7 +336,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
     n = ctx.n
     n_q = _n_coordinates(ig)
     lo, hi = min(bounds), max(bounds)
-    special = list(special or [])
+    special: list = []
     h = ds
     message = f"left [{lo:g}, {hi:g}] in {name}"
     jumped = False
@@ -472,7 +471,7 @@ class _Context:
         if P.exact:
             ig = P.integrator
             dp, dT = self.fam.parameter_direction(lam, d * self.span, ig.meta["params"])
-            s = P._tangent(y, mode, dp, dT)
+            s = P.try_derivatives(y, mode, dp, dT)
             if s is not None:
                 A[:, :n] = (s.monodromy - np.eye(n)) * self.scale[None, :] / self.scale[:, None]
                 A[:, n] = s.parameter * self.span / self.scale

@@ -40,14 +40,15 @@ class PeriodMap:
             raise ValueError(f"periods must be a whole number >= 1, got {periods!r}")
         if jacobian not in JACOBIAN_METHODS:
             raise ValueError(f"jacobian = {jacobian!r} must be one of {', '.join(JACOBIAN_METHODS)}")
-        if jacobian == "tangent" and getattr(integrator, "kernel", "") != "product":
+        product = getattr(integrator, "kernel", "") == "product"
+        if jacobian == "tangent" and not product:
             raise ValueError("jacobian = 'tangent' needs the product-mode kernel (models with at most one contact)")
         self.integrator = integrator
         self.periods = int(periods)
         self.n = integrator.n_physical
         self.evaluations = 0
         self.method = jacobian
-        self.exact = jacobian != "differences" and getattr(integrator, "kernel", "") == "product"
+        self.exact = jacobian != "differences" and product
 
     def derivatives(self, y, mode, dp=None, dperiod: float = 0.0):
         """``P(y)``, its mode, ``dP/dy`` and (with ``dp``) ``dP/dlambda`` by the tangent of the flow.
@@ -102,14 +103,17 @@ class PeriodMap:
     def linearize(self, y, mode, scale, rel_step: float = 1e-6):
         """``P(y)``, the mode it ends in and ``dP/dy``: one tangent run, or the map and its differences."""
         if self.exact:
-            s = self._tangent(y, mode)
+            s = self.try_derivatives(y, mode)
             if s is not None:
                 return s.state, s.mode, s.monodromy
         Py, mode_end = self(y, _copy(mode))
-        return Py, mode_end, self.jacobian(y, mode, scale, rel_step)
+        return Py, mode_end, self.differences(y, mode, scale, rel_step)
 
-    def _tangent(self, y, mode, dp=None, dperiod: float = 0.0):
-        """:meth:`derivatives`, or None where the tangent fails and differences may stand in."""
+    def try_derivatives(self, y, mode, dp=None, dperiod: float = 0.0):
+        """:meth:`derivatives`, or None where the tangent fails and differences may stand in.
+
+        With ``jacobian="tangent"`` a failure is not excused: it raises :class:`FlowError`.
+        """
         from ..numeric.tangent import SensitivityError
         try:
             return self.derivatives(y, _copy(mode), dp, dperiod)
@@ -129,7 +133,7 @@ class PeriodMap:
         perturbation of ``rel_step`` would then change the sequence).
         """
         if self.exact:
-            s = self._tangent(y, mode)
+            s = self.try_derivatives(y, mode)
             if s is not None:
                 return s.monodromy
         return self.differences(y, mode, scale, rel_step)

@@ -23,7 +23,7 @@ def _between(value, x, y, k):
 COLOURS = [("C0", "C3"), ("C2", "C1"), ("C4", "C6"), ("C9", "C5")]
 
 
-def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", overlay=None) -> Figure:
+def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", overlay=None, ax=None) -> Figure:
     """Forced-response or bifurcation plot of a :class:`~blademodel.orbits.Branch` (or several).
 
     Parameters
@@ -39,10 +39,15 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
         diagram: a period-2 orbit draws two curves).
     overlay : tuple of arrays, optional
         ``(values, amplitudes)`` of a brute-force sweep, drawn as dots.
+    ax : matplotlib Axes, optional
+        Draw into these axes (of a figure with several panels) instead of a new figure.
     """
     branches = list(branch) if isinstance(branch, (list, tuple)) else [branch]
-    fig = Figure(figsize=(7, 4.2))
-    ax = fig.add_subplot()
+    own = ax is None
+    if own:
+        fig = Figure(figsize=(7, 4.2))
+        ax = fig.add_subplot()
+    fig = ax.figure
     marked = set()
     for b, (c_stable, c_unstable) in zip(branches, COLOURS * len(branches)):
         i = b.state_names.index(state)
@@ -78,5 +83,6 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
     ax.set_title(f"period-{'/'.join(str(p) for p in periods)} orbits continued in {first.field}")
     ax.legend(loc="best", fontsize=8)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
+    if own:
+        fig.tight_layout()
     return fig
