@@ -8,6 +8,7 @@ import sys
 import numpy as np
 
 from ..orbits import FlowError, ShootingError, continuation, period_doubled_branch
+from ..progress import Progress
 from . import jsonout
 from .common import add_model_arguments, add_stepping_arguments, check_at_least_one, config_and_model
 from .output import check_output_file
@@ -47,11 +48,15 @@ def register(subparsers) -> argparse.ArgumentParser:
     return p
 
 
-def _progress(point: int, value: float) -> None:
-    if sys.stderr.isatty():
-        print(f"\rpoint {point}: {value:.6g}", end="", file=sys.stderr)
-    elif point % 25 == 0:
-        print(f"point {point}: {value:.6g}", file=sys.stderr)
+def _reporter(label: str, param: str):
+    """``progress(point, value)`` for :func:`continuation`: the point count and the field's value."""
+    shown = Progress("points", label=label)
+
+    def progress(point: int, value: float) -> None:
+        shown(point, 0, f"{param} = {value:.6g}")
+
+    progress.interrupt = shown.interrupt
+    return progress
 
 
 def sweep_overlay(path, field: str, state_index: int, law: str | None = None) -> tuple:
@@ -99,12 +104,12 @@ def run(args: argparse.Namespace) -> int:
         branch = continuation(config, args.param, args.start, args.stop, periods=args.period,
                               transient=args.transient, max_points=args.max_points, ds_max=args.ds_max,
                               steps_per_period=args.steps_per_period, event_tol=args.event_tol, method=args.method,
-                              progress=_progress)
+                              progress=(progress := _reporter("branch", args.param)))
     except (ShootingError, FlowError) as e:
+        progress.interrupt()
         print(f"error: {e}", file=sys.stderr)
         return 1
-    if sys.stderr.isatty():
-        print(file=sys.stderr)
+    progress.interrupt()
     doubled = []
     if args.switch:
         for k, pd in enumerate(branch.points("period-doubling"), 1):
@@ -113,13 +118,13 @@ def run(args: argparse.Namespace) -> int:
                     config, args.param, pd, args.start, args.stop, periods=args.period, max_points=args.max_points,
                     ds_max=args.ds_max, steps_per_period=args.steps_per_period, event_tol=args.event_tol,
                     method=args.method,
-                    progress=_progress))
+                    progress=(progress := _reporter(f"period-doubled branch {k}", args.param))))
             except (ShootingError, FlowError) as e:
+                progress.interrupt()
                 print(f"warning: no switch at the period doubling {k} ({args.param} = {pd.param:.6g}): {e}",
                       file=sys.stderr)
                 doubled.append(None)
-            if sys.stderr.isatty():
-                print(file=sys.stderr)
+            progress.interrupt()
     state = args.state or branch.state_names[0]
     if state not in branch.state_names:
         raise ValueError(f"--state {state!r}: not a state of the model ({', '.join(branch.state_names)})")

@@ -12,6 +12,7 @@ from ..analysis import mean_square, periodicity_label, vibration_reduction
 from ..numeric.mean_square import mean_square_run, without_contacts
 from ..numeric import SimulationError, simulate
 from ..numeric.limits import check_run_length
+from ..progress import Progress
 from . import jsonout
 from .common import add_model_arguments, add_stepping_arguments, config_and_model
 from .output import check_output_file
@@ -39,12 +40,6 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=run)
     return p
-
-
-def _progress(done: int, total: int) -> None:
-    if sys.stderr.isatty():
-        bar = "#" * int(30 * done / total)
-        print(f"\r[{bar:<30}] {done}/{total} periods", end="" if done < total else "\n", file=sys.stderr)
 
 
 def _vibration_reduction(model, result, args) -> tuple[float | None, str | None]:
@@ -137,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = simulate(model, periods=args.periods, transient=args.transient,
                           steps_per_period=args.steps_per_period, event_tol=args.event_tol,
-                          length_scale=model.length_scale, progress=_progress, record_every=args.record_every,
+                          length_scale=model.length_scale, progress=Progress("periods", label="simulate"), record_every=args.record_every,
                           kernel=args.kernel, method=args.method, event_location=args.event_location,
                           detect_grazing=not args.no_grazing)
     except SimulationError as e:

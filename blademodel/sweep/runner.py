@@ -15,6 +15,7 @@ from .errors import ResultFileError, SweepInterrupted
 from .executors import choose
 from .lock import ResultLock
 from ..analysis import motion_class
+from ..progress import Progress
 from .point import build_config, motion_code, run_point
 from .spec import Study
 
@@ -46,12 +47,6 @@ def points(study: Study) -> tuple[list[str], list[list[float]], list[str], list[
             law_of.append(law)
             overrides.append(over)
     return fields, values, law_of, overrides
-
-
-def _bar(done: int, total: int) -> None:
-    if sys.stderr.isatty():
-        bar = "#" * int(30 * done / max(total, 1))
-        print(f"\r[{bar:<30}] {done}/{total} points", end="" if done < total else "\n", file=sys.stderr)
 
 
 def _say(message: str) -> None:
@@ -88,7 +83,7 @@ def _prepare(out: Path, layout: dict, expected: tuple, study_json: str, restart:
 
 
 def run_study(study: Study, out: str | Path, *, workers: int | None = None, scheduler: str | None = None,
-              restart: bool = False, progress: Callable[[int, int], None] | None = _bar,
+              restart: bool = False, progress: Callable[[int, int], None] | str | None = "stderr",
               log: Callable[[str], None] | None = _say) -> Path:
     """Run every pending point of ``study`` into the NetCDF file ``out``.
 
@@ -109,8 +104,10 @@ def run_study(study: Study, out: str | Path, *, workers: int | None = None, sche
         Address of a Dask distributed scheduler to run the points on.
     restart : bool
         Discard an existing file and start again.
-    progress : callable, optional
-        ``progress(done, total)`` after every point.
+    progress : callable, "stderr" or None
+        ``progress(done, total)`` after every point. ``"stderr"`` (default): a
+        :class:`~blademodel.progress.Progress` on standard error (a bar on a
+        terminal, a line every 30 s otherwise); None: silent.
     log : callable, optional
         ``log(message)`` for what the run finds in an existing file (resumed,
         reused, repaired); default: printed to stderr.
@@ -145,6 +142,8 @@ def run_study(study: Study, out: str | Path, *, workers: int | None = None, sche
                   n_state=n_state,
                   history=run["history_periods"] * run["steps_per_period"] + 1 if run["history_periods"] else 0)
     total = len(values)
+    if progress == "stderr":
+        progress = Progress("points", label=out.name)
     with ResultLock(out):
         todo = _prepare(out, layout, (fields, values, laws), study_json, restart, log)
         done = total - len(todo)
@@ -173,8 +172,9 @@ def run_study(study: Study, out: str | Path, *, workers: int | None = None, sche
                 if close is not None:
                     close()
         except KeyboardInterrupt:
-            if sys.stderr.isatty():
-                print(file=sys.stderr)   # end the progress bar's line
+            interrupt = getattr(progress, "interrupt", None)
+            if interrupt is not None:
+                interrupt()   # end a half-drawn progress bar's line
             raise SweepInterrupted(f"interrupted: {done} of {total} points are saved in {out}; run the same "
                                    f"command again to resume") from None
     return out
