@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..sweep import load_study, open_result
 from ..sweep.studies import paper_figures, summarize
-from .sweep import add_run_arguments, execute
+from .sweep import add_run_arguments, default_out, execute
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -34,8 +34,7 @@ def run(args: argparse.Namespace) -> int:
     summary, failed = {}, 0
     for name in names:
         study = load_study(known[name])
-        folder = Path(args.out) / name
-        out = folder / f"{name}{'_quick' if args.quick else ''}.nc"
+        out = default_out(Path(args.out), name, args.quick)
         t0 = time.perf_counter()
         figures, ok = execute(study, out, args)
         failed += not ok

@@ -25,7 +25,8 @@ def register(subparsers) -> argparse.ArgumentParser:
                               description="Run every point of a study into one NetCDF file, written point by "
                                           "point: a killed sweep resumes where it stopped.")
     p.add_argument("study", metavar="STUDY.yaml")
-    p.add_argument("--out", metavar="FILE", help="result file (default: out/<study name>.nc)")
+    p.add_argument("--out", metavar="FILE", help="result file (default: out/<study name>/<study name>.nc; "
+                                                 "the figures go beside it)")
     p.add_argument("--warm-start", action="store_true", help="start each point from the previous final state")
     add_run_arguments(p)
     p.set_defaults(run=run)
@@ -84,10 +85,14 @@ def execute(study, out: Path, args) -> tuple[list[Path], bool]:
     return plot_result(out, out.parent), True
 
 
-def default_out(folder: Path, name: str) -> Path:
-    """``folder/name.nc``, refused if it would not lie inside ``folder``."""
-    out = folder / f"{name}.nc"
-    if out.resolve().parent != folder.resolve():
+def default_out(folder: Path, name: str, quick: bool = False) -> Path:
+    """``folder/name/name.nc`` (``name_quick.nc`` for ``--quick``): the one layout of ``sweep`` and ``reproduce``.
+
+    The study's folder holds its data and its figures. Refused if it would not lie
+    inside ``folder``.
+    """
+    out = folder / name / f"{name}{'_quick' if quick else ''}.nc"
+    if out.resolve().parent.parent != folder.resolve():
         raise ValueError(f"study name {name!r} would write outside {folder}/; use a plain name")
     return out
 
@@ -95,7 +100,7 @@ def default_out(folder: Path, name: str) -> Path:
 def run(args: argparse.Namespace) -> int:
     """Run the sweep; return the exit code (1 if every point failed)."""
     study = load_study(args.study)
-    out = Path(args.out) if args.out else default_out(Path("out"), f"{study.name}{'_quick' if args.quick else ''}")
+    out = Path(args.out) if args.out else default_out(Path("out"), study.name, args.quick)
     figures, ok = execute(study, out, args)
     print(f"results: {out}")
     for f in figures:

@@ -105,7 +105,7 @@ class Study(_Strict):
     @field_validator("name")
     @classmethod
     def _plain_name(cls, v: str) -> str:
-        # The name becomes file names (out/<name>.nc, figures): it must stay inside the output folder.
+        # The name becomes file names (out/<name>/<name>.nc, figures): it must stay inside the output folder.
         if not NAME_PATTERN.fullmatch(v) or ".." in v:
             raise ValueError("a study name is a plain file name: letters, digits, '_', '-' and '.', starting "
                              "with a letter or digit, without '/' or '..'")
