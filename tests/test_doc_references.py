@@ -24,6 +24,7 @@ MODEL_MD = ROOT / "docs" / "MODEL.md"
 #: Paths cited on purpose that are not in the repository, with the reason.
 NOT_IN_REPOSITORY = {
     "docs/_build/html": "the output folder of the docs build",
+    "docs/_build/html/index.html": "the docs build's front page",
     "models/mine.yaml": "a user's file, in an example error message",
 }
 
