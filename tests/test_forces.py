@@ -60,7 +60,8 @@ def test_multiharmonic_loads_are_the_sum_of_their_terms():
     loads = f.loads({}, {}, t)
     assert sp.expand(loads["x1"] - Q * sp.cos(b)) == 0 and sp.expand(loads["y1"] - Q * sp.sin(b)) == 0
     assert f.orders == (1, 3) and f.frequency.name == "omega"
-    one = MultiHarmonicForce(m, Param("omega", 3.0), [(1, Param("F0", 2.0), Param("phi", 0.1))], angle=Param("beta", 0.4))
+    one = MultiHarmonicForce(m, Param("omega", 3.0), [(1, Param("F0", 2.0), Param("phi", 0.1))],
+                             angle=Param("beta", 0.4))
     same = HarmonicForce(m, Param("F0", 2.0), Param("omega", 3.0), Param("phi", 0.1), Param("beta", 0.4))
     assert one.loads({}, {}, t) == same.loads({}, {}, t)       # one harmonic of order 1 is a HarmonicForce
 
@@ -86,8 +87,8 @@ def test_constant_force_rejects_a_non_finite_value():
 def test_the_period_is_the_base_frequency_and_constant_forces_have_none():
     m = Mass("1", 1.0, dofs=("x",))
     base = (Spring("x1", 1.0),)
-    assert excitation_period(Model((m,), base, (), (ConstantForce(m, 1.0), MultiHarmonicForce(m, 4.0, [(2, 1.0), (5, 1.0)]))
-                                   )) == pytest.approx(2 * math.pi / 4.0, rel=1e-15)
+    forces = (ConstantForce(m, 1.0), MultiHarmonicForce(m, 4.0, [(2, 1.0), (5, 1.0)]))
+    assert excitation_period(Model((m,), base, (), forces)) == pytest.approx(2 * math.pi / 4.0, rel=1e-15)
     with pytest.raises(ValueError, match="0 distinct base frequencies"):
         excitation_period(Model((m,), base, (), (ConstantForce(m, 1.0),)))
 

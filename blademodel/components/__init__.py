@@ -8,5 +8,5 @@ from .mass import Mass, coordinate_name
 from .parameter import Param
 from .spring import Spring
 
-__all__ = ["Mass", "Spring", "Damper", "ConstantForce", "HarmonicForce", "MultiHarmonicForce", "Harmonic", "Contact", "Param", "FrictionLaw",
-           "Coulomb", "Jenkins", "NoFriction", "Iwan", "coordinate_name"]
+__all__ = ["Mass", "Spring", "Damper", "ConstantForce", "HarmonicForce", "MultiHarmonicForce", "Harmonic",
+           "Contact", "Param", "FrictionLaw", "Coulomb", "Jenkins", "NoFriction", "Iwan", "coordinate_name"]

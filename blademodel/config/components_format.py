@@ -89,7 +89,7 @@ class DamperSpec(_Spec):
 
 
 class HarmonicForceSpec(_Spec):
-    """``amplitude * sin(omega t + phase)`` on ``mass``, along ``angle`` from ``x`` (``type: harmonic``, the default)."""
+    """``amplitude * sin(omega t + phase)`` on ``mass``, along ``angle`` from ``x`` (``type: harmonic``, default)."""
 
     type: Literal["harmonic"] = "harmonic"
     mass: Name
