@@ -20,18 +20,18 @@ from .mass import Mass
 from .parameter import Number, Param, as_param
 
 
-def _directed(mass: Mass, terms: list, angle: Param) -> dict[str, sp.Expr]:
-    """The loads of magnitude ``sum(terms)`` along ``angle`` on the axes ``mass`` moves along.
+def _directed(mass: Mass, Q: sp.Expr, angle: Param) -> dict[str, sp.Expr]:
+    """The loads of magnitude ``Q`` along ``angle`` on the axes ``mass`` moves along.
 
-    Each term is projected on its own, so that a load is a sum of terms
-    ``A sin(w t + phi)`` or constants (the per-contact kernel's forcing tables).
+    Each term of ``Q`` is projected on its own, so that a load is a sum of terms
+    ``A sin(w t + phi)`` and constants (as the per-contact kernel's forcing tables take it).
     """
     beta = angle.symbol
     out = {}
     for dof, proj in (("x", sp.cos(beta)), ("y", sp.sin(beta))):
         c = mass.coordinate(dof)
         if c is not None:
-            out[c] = sp.Add(*[Q * proj for Q in terms])
+            out[c] = sp.Add(*[term * proj for term in sp.Add.make_args(Q)])
     return out
 
 
@@ -85,7 +85,7 @@ class ConstantForce:
 
     def loads(self, q, u, t) -> dict[str, sp.Expr]:
         """Generalized forces, by coordinate name."""
-        return _directed(self.mass, sp.Add.make_args(self.magnitude(t)), self._p["angle"])
+        return _directed(self.mass, self.magnitude(t), self._p["angle"])
 
 
 @dataclass(frozen=True)
@@ -148,7 +148,7 @@ class HarmonicForce:
 
     def loads(self, q, u, t) -> dict[str, sp.Expr]:
         """Generalized forces, by coordinate name."""
-        return _directed(self.mass, sp.Add.make_args(self.magnitude(t)), self._p["angle"])
+        return _directed(self.mass, self.magnitude(t), self._p["angle"])
 
 
 @dataclass(frozen=True)
@@ -249,7 +249,7 @@ class MultiHarmonicForce:
 
     def loads(self, q, u, t) -> dict[str, sp.Expr]:
         """Generalized forces, by coordinate name."""
-        return _directed(self.mass, sp.Add.make_args(self.magnitude(t)), self._p["angle"])
+        return _directed(self.mass, self.magnitude(t), self._p["angle"])
 
 
 #: Any applied force of this module.
