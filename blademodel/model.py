@@ -7,7 +7,8 @@ import json
 from dataclasses import dataclass
 from functools import cached_property
 
-from .components import Contact, Damper, HarmonicForce, Mass, Spring
+from .components import Contact, Damper, Mass, Spring
+from .components.force import Force
 
 
 @dataclass(frozen=True, eq=False)
@@ -17,7 +18,8 @@ class Model:
     Parameters
     ----------
     masses : sequence of Mass
-    springs, dampers, forces, contacts : sequence of the matching components
+    springs, dampers, contacts : sequence of the matching components
+    forces : sequence of ConstantForce, HarmonicForce or MultiHarmonicForce
     name : str
         A label for outputs.
     """
@@ -25,7 +27,7 @@ class Model:
     masses: tuple[Mass, ...]
     springs: tuple[Spring, ...] = ()
     dampers: tuple[Damper, ...] = ()
-    forces: tuple[HarmonicForce, ...] = ()
+    forces: tuple[Force, ...] = ()
     contacts: tuple[Contact, ...] = ()
     name: str = "model"
 
@@ -105,7 +107,7 @@ class Model:
             "masses": [(m.name, m.dofs, pnames(m)) for m in self.masses],
             "springs": [(s.a, s.b, pnames(s)) for s in self.springs],
             "dampers": [(d.a, d.b, pnames(d)) for d in self.dampers],
-            "forces": [(f.mass.name, pnames(f)) for f in self.forces],
+            "forces": [(type(f).__name__, f.mass.name, pnames(f)) for f in self.forces],
             "contacts": [(c.name, c.body1.name, c.body2.name if c.body2 else None, pnames(c),
                           [str(x) for x in c.friction.structure()]) for c in self.contacts],
         }

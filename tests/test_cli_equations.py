@@ -45,8 +45,8 @@ def test_equations_one_mode(capsys):
     code, out, _ = run_cli(capsys, "equations", BILINEAR, "--mode", "stick", "--ascii")
     assert code == 0
     assert "mode stick" in out and "mode slip+" not in out and "mode open" not in out
-    assert "f_c = kd*z" in out
-    assert "m*x1''(t) + cx*x1'(t) + kx*x1" in out      # the paper's left-hand side order
+    assert "f_c = k_d*z" in out
+    assert "m*x_1''(t) + c_x*x_1'(t) + k_x*x_1" in out      # the paper's left-hand side order
 
 
 def test_equations_latex(capsys):
@@ -184,9 +184,9 @@ def test_mode_assignment(capsys):
     assert code == 0 and err == ""
     assert out.startswith("blade_row_3: mode c12=stick,c23=slip+\n")
     assert "--mode" not in out                                       # no hint when a mode is asked for
-    for needle in ("N_c12 = k*", "f_c12 = ", "N_c23 = k*", "f_c23 = kd*z", "z'(t) = "):
+    for needle in ("N_c12 = k*", "f_c12 = ", "N_c23 = k*", "f_c23 = k_d*z", "z'(t) = "):
         assert needle in out, needle
-    assert "m*x3''(t) + cx*x3'(t) + kx*x3" in out
+    assert "m*x_3''(t) + c_x*x_3'(t) + k_x*x_3" in out
 
 
 def test_mode_assignment_leaves_other_contacts_open(capsys):
@@ -228,10 +228,10 @@ def test_contact_equations(capsys):
     for mode in ("open", "stick", "slip+", "slip-"):
         assert f"\nmode {mode}\n" in out
     for needle in ("delta_c23 = ", "r_c23 = ", "v_c23 = ", "N_c23 = delta_c23*k", "Ndot_c23 = ",
-                   "f_c23 = kd*z", "z'(t) = v_c23", "guard close: delta_c23   rises through 0",
-                   "guard stick->slip+: N_c23*mu - kd*z   falls through 0", "-> stick, z = 0"):
+                   "f_c23 = k_d*z", "z'(t) = v_c23", "guard close: delta_c23   rises through 0",
+                   "guard stick->slip+: N_c23*mu - k_d*z   falls through 0", "-> stick, z = 0"):
         assert needle in out, needle
-    assert "x1" not in out                                   # only the contact's own bodies
+    assert "x_1" not in out                                  # only the contact's own bodies
 
 
 def test_contact_equations_of_a_coulomb_stick(capsys):

@@ -2,11 +2,11 @@
 
 from .contact import Contact
 from .damper import Damper
-from .force import HarmonicForce
+from .force import ConstantForce, Harmonic, HarmonicForce, MultiHarmonicForce
 from .friction import Coulomb, FrictionLaw, Iwan, Jenkins, NoFriction
 from .mass import Mass, coordinate_name
 from .parameter import Param
 from .spring import Spring
 
-__all__ = ["Mass", "Spring", "Damper", "HarmonicForce", "Contact", "Param", "FrictionLaw",
-           "Coulomb", "Jenkins", "NoFriction", "Iwan", "coordinate_name"]
+__all__ = ["Mass", "Spring", "Damper", "ConstantForce", "HarmonicForce", "MultiHarmonicForce", "Harmonic",
+           "Contact", "Param", "FrictionLaw", "Coulomb", "Jenkins", "NoFriction", "Iwan", "coordinate_name"]

@@ -1,7 +1,9 @@
 """The generic component-list model format (``model: components``).
 
-A model is a list of masses and the springs, dampers, harmonic forces and
-contacts acting on them, one entry per component of :mod:`blademodel.components`.
+A model is a list of masses and the springs, dampers, forces and contacts
+acting on them, one entry per component of :mod:`blademodel.components`. A
+force's ``type`` is ``harmonic`` (the default), ``constant`` or
+``multiharmonic`` (several harmonics of one base frequency).
 Every numeric field takes a number or the name of an entry of ``parameters:``;
 fields naming the same parameter share one symbol (``omega`` of two forces, say).
 A plain number gets the component's default symbol (``m_1``, ``k_x1``, ``Delta_c``;
@@ -15,7 +17,11 @@ Example::
     masses:   [{name: m, m: 0.085, dofs: [x]}]
     springs:  [{a: x_m, k: 1e5}]
     dampers:  [{a: x_m, c: 3.5}]
-    forces:   [{mass: m, amplitude: 60, omega: omega}]
+    forces:
+      - {mass: m, amplitude: 60, omega: omega}
+      - {type: constant, mass: m, value: -0.834}
+      - {type: multiharmonic, mass: m, omega: omega,
+         harmonics: [{order: 2, amplitude: 5}, {order: 3, amplitude: 2, phase: 0.5}]}
     contacts:
       - {name: c, bodies: [m, ground], gap: -1e-4, alpha: 0, k: 4e5,
          friction: {law: coulomb, mu: 0.5}}
@@ -23,11 +29,12 @@ Example::
 
 from __future__ import annotations
 
-from typing import Literal, Optional, Union
+from typing import Annotated, Literal, Optional, Union
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
 
-from ..components import Contact, Damper, HarmonicForce, Mass, Param, Spring, coordinate_name
+from ..components import (Contact, ConstantForce, Damper, Harmonic, HarmonicForce, Mass, MultiHarmonicForce, Param,
+                          Spring, coordinate_name)
 from ..model import Model
 from .errors import FieldError
 from .friction_format import FrictionSpec, NoFrictionSpec
@@ -81,14 +88,74 @@ class DamperSpec(_Spec):
     c: number(ge=0)
 
 
-class ForceSpec(_Spec):
-    """``amplitude * sin(omega t + phase)`` on ``mass``, along ``angle`` from ``x``."""
+class HarmonicForceSpec(_Spec):
+    """``amplitude * sin(omega t + phase)`` on ``mass``, along ``angle`` from ``x`` (``type: harmonic``, default)."""
 
+    type: Literal["harmonic"] = "harmonic"
     mass: Name
     amplitude: number(ge=0)
     omega: number(gt=0)
     phase: number() = 0.0
     angle: number() = 0.0
+
+    def build(self, resolve, mass: Mass) -> HarmonicForce:
+        return HarmonicForce(mass, resolve(self.amplitude), resolve(self.omega), resolve(self.phase),
+                             resolve(self.angle))
+
+
+class ConstantForceSpec(_Spec):
+    """A constant ``value`` (N, either sign) on ``mass``, along ``angle`` from ``x``: gravity, a preload."""
+
+    type: Literal["constant"]
+    mass: Name
+    value: number()
+    angle: number() = 0.0
+
+    def build(self, resolve, mass: Mass) -> ConstantForce:
+        return ConstantForce(mass, resolve(self.value), resolve(self.angle))
+
+
+class HarmonicSpec(_Spec):
+    """One term ``amplitude * sin(order omega t + phase)`` of a ``multiharmonic`` force."""
+
+    order: int = Field(ge=1, strict=True)
+    amplitude: number(ge=0)
+    phase: number() = 0.0
+
+
+class MultiHarmonicForceSpec(_Spec):
+    """``sum amplitude_k sin(order_k omega t + phase_k)`` on ``mass``, along ``angle`` (``type: multiharmonic``)."""
+
+    type: Literal["multiharmonic"]
+    mass: Name
+    omega: number(gt=0)
+    harmonics: list[HarmonicSpec] = Field(min_length=1)
+    angle: number() = 0.0
+
+    @field_validator("harmonics")
+    @classmethod
+    def _distinct(cls, v: list) -> list:
+        orders = [h.order for h in v]
+        if len(set(orders)) != len(orders):
+            raise ValueError(f"the harmonic orders {orders} must be distinct")
+        return v
+
+    def build(self, resolve, mass: Mass) -> MultiHarmonicForce:
+        return MultiHarmonicForce(mass, resolve(self.omega),
+                                  [Harmonic(h.order, resolve(h.amplitude), resolve(h.phase)) for h in self.harmonics],
+                                  resolve(self.angle))
+
+
+#: Force specs by the value of ``type``.
+FORCE_TYPES = {"harmonic": HarmonicForceSpec, "constant": ConstantForceSpec, "multiharmonic": MultiHarmonicForceSpec}
+
+
+def _force_type(v) -> str:
+    return (v.get("type", "harmonic") if isinstance(v, dict) else getattr(v, "type", None)) or "harmonic"
+
+
+ForceSpec = Annotated[Union[tuple(Annotated[cls, Tag(tag)] for tag, cls in FORCE_TYPES.items())],
+                      Discriminator(_force_type)]
 
 
 class ContactSpec(_Spec):
@@ -226,8 +293,7 @@ class ComponentsModel(_Spec):
                   for i, m in enumerate(self.masses)}
         springs = [make(("springs", i), Spring, s.a, P(s.k), s.b) for i, s in enumerate(self.springs)]
         dampers = [make(("dampers", i), Damper, d.a, P(d.c), d.b) for i, d in enumerate(self.dampers)]
-        forces = [make(("forces", i), HarmonicForce, masses[f.mass], P(f.amplitude), P(f.omega),
-                       P(f.phase), P(f.angle)) for i, f in enumerate(self.forces)]
+        forces = [make(("forces", i), f.build, P, masses[f.mass]) for i, f in enumerate(self.forces)]
         contacts = []
         for i, c in enumerate(self.contacts):
             law = make(("contacts", i, "friction"), c.friction.build, P, c.name)

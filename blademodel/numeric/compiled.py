@@ -87,18 +87,23 @@ def package_sources(*folders: str) -> list[Path]:
 
 _CODE_VERSION: list[str] = []
 
+#: Sources of the symbolic layer that only print equations: editing them changes no kernel.
+DISPLAY_ONLY = frozenset({"symbolic/display.py", "symbolic/names.py"})
+
 
 def _code_version() -> str:
     """Hash of the sources that shape generated code and of the library versions, so edits invalidate the cache.
 
     The files are read, not imported: a process that finds its kernel in the cache
     never imports the symbolic layer or the code generator (start-up time). Every
-    component and the symbolic layer shape the equations, so an edited one regenerates.
+    component and the symbolic layer shape the equations, so an edited one regenerates;
+    the display of the equations (:data:`DISPLAY_ONLY`) does not.
     """
     if not _CODE_VERSION:
         here = PACKAGE / "numeric"
         files = [here / "codegen.py", here / "bracket.py", here / "loop.py", here / "jacobian.py", here / "contract.py",
-                 *package_sources("symbolic", "components", "components/friction")]
+                 *(p for p in package_sources("symbolic", "components", "components/friction")
+                   if p.relative_to(PACKAGE).as_posix() not in DISPLAY_ONLY)]
         _CODE_VERSION.append(hash_sources(files, library_versions()))
     return _CODE_VERSION[0]
 

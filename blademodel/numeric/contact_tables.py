@@ -3,7 +3,8 @@
 SymPy derives each component's own contribution once per model *structure*:
 the inertia of each coordinate, the stiffness and damping entries of springs and
 dampers (``-dQ/dq``, ``-dQ/du`` of their loads, which must be linear), each
-harmonic load as ``A sin(w t + phi)``, and each contact's penetration and
+force's load as a sum of harmonic terms ``A sin(w t + phi)`` and a constant
+(a constant is the frequency group ``w = 0``: ``sin 0 = 0``, ``cos 0 = 1``), and each contact's penetration and
 relative-slip gradients (its n/r projection) and gap. The entries are kept as
 expressions of the parameter names (a JSON form cached on disk), so a run with a
 cached structure evaluates them with :mod:`math` and never imports SymPy, and a
@@ -39,8 +40,8 @@ def derive_tables(model: Model) -> dict:
     ------
     ValueError
         For a component the per-contact kernel cannot take (a nonlinear spring or
-        damper, a load that is not harmonic, a contact that is not affine in the
-        coordinates).
+        damper, a load that is not a constant plus harmonic terms, a contact that
+        is not affine in the coordinates).
     """
     import sympy as sp
 
@@ -74,19 +75,23 @@ def derive_tables(model: Model) -> dict:
         return out
 
     A, W, P = (sp.Wild(n, exclude=[t]) for n in ("A", "W", "P"))
-    forcing = []
+    forcing, constant = [], []
     for comp in model.forces:
         for c, load in comp.loads(q, u, t).items():
             load = sp.sympify(load)
-            if load == 0:
-                continue
-            m = load.match(A * sp.sin(W * t + P))
-            if m is None or m[W] == 0:
-                raise ValueError(f"force on {c}: the per-contact kernel takes harmonic loads A sin(w t + phi), "
-                                 f"got {load}")
-            forcing.append([idx[c], str(m[A]), str(m[W]), str(m[P])])
-            if (sp.sympify(m[A]).free_symbols | sp.sympify(m[W]).free_symbols) & linear_symbols:
-                raise ValueError(f"force on {c}: the amplitude and frequency must not depend on the state")
+            if load.free_symbols & (linear_symbols - {t}):
+                raise ValueError(f"force on {c}: a force must not depend on the state, got {load}")
+            steady = sp.Add(*[term for term in sp.Add.make_args(load) if not term.has(t)])
+            if steady != 0:
+                constant.append([idx[c], str(steady)])
+            for term in sp.Add.make_args(load):
+                if not term.has(t):
+                    continue
+                m = term.match(A * sp.sin(W * t + P))
+                if m is None or m[W] == 0:
+                    raise ValueError(f"force on {c}: the per-contact kernel takes loads made of constants and "
+                                     f"harmonic terms A sin(w t + phi), got {load}")
+                forcing.append([idx[c], str(m[A]), str(m[W]), str(m[P])])
 
     contacts = []
     for ct in model.contacts:
@@ -110,7 +115,7 @@ def derive_tables(model: Model) -> dict:
                          "law": [str(p.symbol) for p in ct.friction.parameters().values()]})
     return {"coordinates": coords, "inertia": [inertia[c] for c in coords],
             "stiffness": linear(model.springs, q, "spring"), "damping": linear(model.dampers, u, "damper"),
-            "forcing": forcing, "contacts": contacts}
+            "forcing": forcing, "constant": constant, "contacts": contacts}
 
 
 def cached_tables(model: Model) -> dict:
@@ -181,6 +186,13 @@ class NumericTables:
             fg.append(groups.index(w))
             fs.append(a * math.cos(ph))  # a sin(w t + ph) = a cos(ph) sin(w t) + a sin(ph) cos(w t)
             fc.append(a * math.sin(ph))
+        for i, a in tables["constant"]:   # the group w = 0: fs sin(0) + fc cos(0) = fc
+            if 0.0 not in groups:
+                groups.append(0.0)
+            fi.append(i)
+            fg.append(groups.index(0.0))
+            fs.append(0.0)
+            fc.append(ev(a))
         self.forcing = (np.array(fi, dtype=np.int64), np.array(fg, dtype=np.int64), np.array(fs, dtype=float),
                         np.array(fc, dtype=float), np.array(groups, dtype=float))
         cs = tables["contacts"]

@@ -8,6 +8,7 @@ import warnings
 
 import numpy as np
 
+from ..components.force import base_frequencies
 from ..model import Model
 from .compiled import compile_model
 from .contract import N_COUNTERS
@@ -17,10 +18,10 @@ from .stability import check_step, max_stable_step, step_is_stable
 
 
 def excitation_period(model: Model) -> float:
-    """``2 pi / omega`` of the model's harmonic forces (they must share ``omega``)."""
-    omegas = {f.parameters()["omega"].value for f in model.forces}
+    """``2 pi / omega`` of the model's periodic forces (they must share the base ``omega``; constant forces have none)."""
+    omegas = base_frequencies(model.forces)
     if len(omegas) != 1:
-        raise ValueError(f"the forces have {len(omegas)} distinct frequencies {sorted(omegas)}; "
+        raise ValueError(f"the forces have {len(omegas)} distinct base frequencies {sorted(omegas)}; "
                          "give the period explicitly")
     return 2 * math.pi / omegas.pop()
 

@@ -1,4 +1,4 @@
-"""Readable equations of motion of a derived system, per mode.
+r"""Readable equations of motion of a derived system, per mode.
 
 The equations are written as in the paper (Eq. 2-3): the mass, damping and
 stiffness terms on the left, the excitation and the contact forces ``N_c`` and
@@ -10,6 +10,11 @@ stiffness terms on the left, the excitation and the contact forces ``N_c`` and
 mode, ``f_c`` is the constraint force derived by :func:`~blademodel.symbolic.derive`)
 and the rates of the friction laws' own states. Coordinates are displayed as
 functions of time, ``x1(t)``, with ``sympy.physics.vector`` dot notation.
+
+The printed forms (:func:`pretty`, :func:`latex` and their contact versions)
+show every symbol by its display name (:mod:`~blademodel.symbolic.names`):
+``c_{x} \dot{x}_{1}``, not the product ``cx \dot{x}_{1}``. The symbols themselves,
+and so the generated code, keep the model's names.
 """
 
 from __future__ import annotations
@@ -20,14 +25,15 @@ import sympy as sp
 from sympy.physics.vector import dynamicsymbols
 from sympy.physics.vector.printing import vlatex, vpprint
 
+from .names import readable_symbols
 from .system import ContactEquations, HybridSystem, Mode, ModeSystem
 
 #: A whole derived system, or one mode derived alone (:func:`~blademodel.symbolic.assembly.derive_mode`).
 System = Union[HybridSystem, ModeSystem]
 
 
-def _time_functions(system: System) -> tuple[sp.Symbol, dict]:
-    """``t`` and the substitution of state symbols by functions of time."""
+def _time_functions(system: System, readable: bool = False) -> tuple[sp.Symbol, dict]:
+    """``t`` and the substitution of state symbols by functions of time (and of names by display names)."""
     t = dynamicsymbols._t
     sub = {system.t: t}
     for q, u in zip(system.q, system.u):
@@ -36,7 +42,17 @@ def _time_functions(system: System) -> tuple[sp.Symbol, dict]:
         sub[u] = f.diff(t)
     for s in system.s:
         sub[s] = dynamicsymbols(s.name)
+    if readable:
+        sub = _readable(sub, [*system.params, *system.normal_symbols, *system.friction_symbols])
     return t, sub
+
+
+def _readable(sub: dict, symbols: list) -> dict:
+    """``sub`` followed by the display names of its values and of ``symbols``."""
+    names = readable_symbols([*sub.values(), *symbols])
+    out = {k: v.xreplace(names) for k, v in sub.items()}
+    out.update((k, v) for k, v in names.items() if k not in out and isinstance(k, sp.Symbol))
+    return out
 
 
 def _ordered_add(terms: list) -> sp.Expr:
@@ -51,7 +67,7 @@ def _mode(system: System, mode_name: str) -> Mode:
     return system.modes[system.mode_index(mode_name)]  # KeyError naming the valid modes
 
 
-def equations(system: System, mode_name: str) -> list[sp.Eq]:
+def equations(system: System, mode_name: str, *, readable: bool = False) -> list[sp.Eq]:
     """Equations of motion of the coordinates in one mode, ``M q'' + ... = RHS``.
 
     Parameters
@@ -59,6 +75,9 @@ def equations(system: System, mode_name: str) -> list[sp.Eq]:
     system : HybridSystem or ModeSystem
     mode_name : str
         A name from ``[m.name for m in system.modes]``.
+    readable : bool
+        Symbols by their display names (``c_x`` for ``cx``; for printing) instead
+        of the model's symbols.
 
     Returns
     -------
@@ -75,7 +94,7 @@ def equations(system: System, mode_name: str) -> list[sp.Eq]:
         For an unknown mode; the message lists the valid ones.
     """
     mode_name = _mode(system, mode_name).name
-    t, sub = _time_functions(system)
+    t, sub = _time_functions(system, readable)
     rhs_all = system.generalized_forces[mode_name]
     contact_syms = set(system.normal_symbols) | set(system.friction_symbols)
     u_set, q_set = set(system.u), set(system.q)
@@ -92,7 +111,7 @@ def equations(system: System, mode_name: str) -> list[sp.Eq]:
                 lhs_q.append(-term)
             else:
                 forcing.append(term)
-        inertia = system.mass_matrix[i, i] * dynamicsymbols(q.name).diff(t, 2)
+        inertia = system.mass_matrix[i, i] * sub[q].diff(t, 2)
         key = sp.default_sort_key
         lhs = [inertia] + sorted(lhs_u, key=key) + sorted(lhs_q, key=key)
         rhs = sorted(forcing, key=key) + sorted(contact, key=key)
@@ -108,7 +127,8 @@ def _over_common_denominator(expr: sp.Expr, sub: dict) -> sp.Expr:
     return num if den == 1 else sp.Mul(num, sp.Pow(den, -1, evaluate=False), evaluate=False)
 
 
-def definitions(system: System, mode_name: str, *, open_contacts: bool = True) -> list[sp.Eq]:
+def definitions(system: System, mode_name: str, *, open_contacts: bool = True,
+                readable: bool = False) -> list[sp.Eq]:
     """What the contact symbols are in one mode, and the law states' rates.
 
     Parameters
@@ -118,6 +138,8 @@ def definitions(system: System, mode_name: str, *, open_contacts: bool = True) -
     open_contacts : bool
         ``False`` leaves out the open contacts' ``N_c = 0``, ``f_c = 0`` and their
         states' rates when zero (many contacts, few closed).
+    readable : bool
+        Symbols by their display names (for printing).
 
     Returns
     -------
@@ -127,21 +149,21 @@ def definitions(system: System, mode_name: str, *, open_contacts: bool = True) -
         every internal state of the friction laws.
     """
     mode = _mode(system, mode_name)
-    t, sub = _time_functions(system)
+    t, sub = _time_functions(system, readable)
     out = []
     shown = [open_contacts or local != "open" for local in mode.local]
     for N, f, Nv, fv, show in zip(system.normal_symbols, system.friction_symbols,
                                   mode.normal_forces, mode.friction_forces, shown):
         if not show:
             continue
-        out.append(sp.Eq(N, sp.sympify(Nv).xreplace(sub), evaluate=False))
-        out.append(sp.Eq(f, _over_common_denominator(sp.sympify(fv), sub), evaluate=False))
+        out.append(sp.Eq(sub.get(N, N), sp.sympify(Nv).xreplace(sub), evaluate=False))
+        out.append(sp.Eq(sub.get(f, f), _over_common_denominator(sp.sympify(fv), sub), evaluate=False))
     owners = ([j for j, c in enumerate(system.model.contacts) for _ in c.friction.states]
               if not open_contacts else [None] * len(system.s))
     for s, rate, j in zip(system.s, mode.state_rates, owners):
         if j is not None and not shown[j] and sp.sympify(rate) == 0:
             continue
-        out.append(sp.Eq(dynamicsymbols(s.name).diff(t), sp.sympify(rate).xreplace(sub), evaluate=False))
+        out.append(sp.Eq(sub[s].diff(t), sp.sympify(rate).xreplace(sub), evaluate=False))
     return out
 
 
@@ -160,7 +182,7 @@ def _heading(system: System, name: str) -> str:
 
 def _definitions(system: System, name: str) -> list[sp.Eq]:
     """The definitions printed: a mode derived alone leaves out its open contacts."""
-    return definitions(system, name, open_contacts=not isinstance(system, ModeSystem))
+    return definitions(system, name, open_contacts=not isinstance(system, ModeSystem), readable=True)
 
 
 def pretty(system: System, mode: Optional[str] = None, *, unicode: bool = True) -> str:
@@ -185,7 +207,7 @@ def pretty(system: System, mode: Optional[str] = None, *, unicode: bool = True) 
     for name in _modes(system, mode):
         head = _heading(system, name)
         lines = [head, ("═" if unicode else "=") * len(head)]
-        lines += [vpprint(eq, **settings) for eq in equations(system, name)]
+        lines += [vpprint(eq, **settings) for eq in equations(system, name, readable=True)]
         defs = _definitions(system, name)
         if defs:
             lines.append("where")
@@ -222,7 +244,7 @@ def latex(system: System, mode: Optional[str] = None) -> str:
     """
     blocks = []
     for name in _modes(system, mode):
-        rows = [_tex_eq(eq) for eq in equations(system, name)]
+        rows = [_tex_eq(eq) for eq in equations(system, name, readable=True)]
         defs = _definitions(system, name)
         body = " \\\\\n".join(rows)
         if defs:
@@ -238,8 +260,11 @@ def latex(system: System, mode: Optional[str] = None) -> str:
 _DIRECTION = {-1: "falls through 0", 1: "rises through 0", 0: "crosses 0"}
 
 
-def _contact_sub(ce: ContactEquations) -> dict:
-    """The substitution of the state symbols by functions of time (``Ndot_c`` prints as a dotted N)."""
+def _contact_sub(ce: ContactEquations, shown: list) -> dict:
+    """The substitution of the state symbols by functions of time (``Ndot_c`` prints as a dotted N).
+
+    The names are display names, also of the symbols ``shown`` (those the rows add).
+    """
     t = dynamicsymbols._t
     sub = {}
     for q, u in zip(ce.q, ce.u):
@@ -248,7 +273,7 @@ def _contact_sub(ce: ContactEquations) -> dict:
         sub[u] = f.diff(t)
     for s in ce.states.values():
         sub[s] = dynamicsymbols(s.name)
-    return sub
+    return _readable(sub, [*ce.params, ce.k, ce.N, ce.Ndot, ce.v, ce.f, *shown])
 
 
 def _uses_Ndot(ce: ContactEquations) -> bool:
@@ -269,31 +294,32 @@ def _contact_rows(ce: ContactEquations) -> list[tuple]:
     ``("guard", name, expr, direction text)``, ``("candidate", mode, condition or None, resets)``.
     """
     t = dynamicsymbols._t
-    sub = _contact_sub(ce)
     delta = sp.Symbol(f"delta_{ce.name}")
     r = sp.Symbol(f"r_{ce.name}")
+    vdot = sp.Symbol(f"vdot_{ce.name}")
+    sub = _contact_sub(ce, [delta, r, vdot])
 
     def X(expr):
         expr = sp.sympify(expr)
-        return delta if expr == ce.penetration else expr.xreplace(sub)
+        return sub.get(delta, delta) if expr == ce.penetration else expr.xreplace(sub)
 
-    rows = [("eq", sp.Eq(delta, X(ce.penetration.xreplace(sub)), evaluate=False),
+    N, f = X(ce.N), X(ce.f)
+    rows = [("eq", sp.Eq(X(delta), ce.penetration.xreplace(sub), evaluate=False),
              "penetration: closed while positive"),
-            ("eq", sp.Eq(r, X(ce.slip), evaluate=False), "relative slip"),
-            ("eq", sp.Eq(ce.v, X(ce.definitions[ce.v]), evaluate=False), "relative slip velocity, dr/dt"),
-            ("eq", sp.Eq(ce.N, sp.Mul(ce.k, delta, evaluate=False), evaluate=False),
+            ("eq", sp.Eq(X(r), X(ce.slip), evaluate=False), "relative slip"),
+            ("eq", sp.Eq(X(ce.v), X(ce.definitions[ce.v]), evaluate=False), "relative slip velocity, dr/dt"),
+            ("eq", sp.Eq(N, sp.Mul(X(ce.k), X(delta), evaluate=False), evaluate=False),
              "normal force while closed, 0 while open")]
     if _uses_Ndot(ce):
-        rows.append(("eq", sp.Eq(ce.Ndot, X(ce.definitions[ce.Ndot]), evaluate=False), "dN/dt while closed"))
+        rows.append(("eq", sp.Eq(X(ce.Ndot), X(ce.definitions[ce.Ndot]), evaluate=False), "dN/dt while closed"))
     for m in ce.modes:
         rows.append(("mode", m.mode))
         if m.mode == "open":
-            rows.append(("eq", sp.Eq(ce.N, 0, evaluate=False), None))
+            rows.append(("eq", sp.Eq(N, 0, evaluate=False), None))
         if isinstance(m.friction_force, sp.Basic):
-            rows.append(("eq", sp.Eq(ce.f, X(m.friction_force), evaluate=False), None))
+            rows.append(("eq", sp.Eq(f, X(m.friction_force), evaluate=False), None))
         else:
-            vdot = sp.Symbol(f"vdot_{ce.name}")
-            rows.append(("stick", ce.f, sp.Eq(vdot, 0, evaluate=False)))
+            rows.append(("stick", f, sp.Eq(X(vdot), 0, evaluate=False)))
         for s, rate in m.rates.items():
             rows.append(("eq", sp.Eq(X(s).diff(t), X(rate), evaluate=False), None))
         for g in m.guards:
@@ -351,7 +377,7 @@ def pretty_contact(ce: ContactEquations, *, unicode: bool = True) -> str:
         elif kind == "mode":
             lines.append(f"mode {row[1]}")
         elif kind == "stick":
-            lines.append(f"  {row[1].name}: the stick constraint force, which holds "
+            lines.append(f"  {vpprint(row[1], **settings)}: the stick constraint force, which holds "
                          f"{vpprint(row[2], **settings)}")
             lines.append("    (it depends on the other contacts' modes: see --mode)")
         elif kind == "guard":

@@ -277,7 +277,7 @@ def scaled_equations(system: Model | HybridSystem, *, length: sp.Symbol | None =
         length = _unique_symbol({c.parameters()["gap"].symbol for c in model.contacts},
                                 "length scale (one contact gap)", "length=")
     if frequency is None:
-        frequency = _unique_symbol({f.parameters()["omega"].symbol for f in model.forces},
+        frequency = _unique_symbol({f.frequency.symbol for f in model.forces if f.frequency is not None},
                                    "time scale (one excitation frequency)", "frequency=")
     L, W = length, frequency
 
