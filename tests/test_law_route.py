@@ -128,6 +128,7 @@ def test_defaults_can_be_set_from_outside(tmp_path):
     """A law's numeric defaults are part of the config, so ``--set`` reaches them by their key."""
     config = load_config(row_yaml(tmp_path, "iwan", "{law: iwan, elements: 2}"))
     assert config.model_dump()["contacts"][0]["friction"] == {"law": "iwan", "mu": 0.5, "kd": 1e6, "elements": 4}
+    assert type(config).model_validate(config.model_dump()).model_dump() == config.model_dump()
     out = apply_overrides(config, {"contacts.0.friction.mu": "0.4"})
     assert friction_values(out.build()) == {"mu_c12": 0.4, "kd_c12": 1e6, "mu_c23": 0.5, "kd_c23": 1e6}
     assert friction_values(config.build()) == {"mu_c12": 0.5, "kd_c12": 1e6, "mu_c23": 0.5, "kd_c23": 1e6}
@@ -140,7 +141,7 @@ def test_defaults_can_be_set_from_outside(tmp_path):
      "contacts.1.friction.distribution = 'gauss': iwan: distribution = 'gauss' must be one of uniform, custom"),
     ("{law: iwan, bogus: 1}", "contacts.1.friction.bogus = 1: iwan: unknown option of Iwan (known: mu, kd, "),
     ("{law: bilinear, mu: -1}", "contacts.1.friction.mu = -1: bilinear: mu = -1.0 must be >= 0.0"),
-    ("{law: iwan, mu: yes}", "contacts.1.friction.mu = True: Input should be a number or the name of a parameter"),
+    ("{law: iwan, mu: yes}", "contacts.1.friction.mu = True: iwan: mu = True must be a number, not a boolean"),
     ("{law: iwan, mu: 1e400}", "contacts.1.friction.mu = '1e400': Input should be a finite number"),
     ("{law: iwan, mu: mu_typo}", "contacts.1.friction.mu = 'mu_typo': unknown parameter (known: m, kx, ky,"),
     (f'{{law: "{LAW}", v0: 0}}', f"contacts.1.friction.v0 = 0: {LAW}: v0 = 0.0 must be > 0.0"),
@@ -196,8 +197,13 @@ def test_disk_contacts_with_their_own_options_get_their_own_symbols():
         "mu": 0.5, "kd": 1e6, "mu_c2": 0.3}
 
 
-def test_disk_option_errors_name_the_contact_field(tmp_path):
+@pytest.mark.parametrize("options, expected", [
+    ("{v0: -1}", "contacts.1.friction_options.v0 = -1: {law}: v0 = -1.0 must be > 0.0"),
+    ("{v0: yes}", "contacts.1.friction_options.v0 = True: {law}: v0 = True must be a number, not a boolean"),
+])
+def test_disk_option_errors_name_the_contact_field(tmp_path, options, expected):
     (tmp_path / "d.yaml").write_text(f"model: bladed_disk\nblades: 3\nfriction: {LAW}\n"
-                                     "contacts:\n  1: {friction_options: {v0: -1}}\n")
-    with pytest.raises(ConfigError, match=f"contacts.1.friction_options.v0 = -1: {LAW}: v0 = -1.0 must be > 0.0"):
+                                     f"contacts:\n  1: {{friction_options: {options}}}\n")
+    with pytest.raises(ConfigError) as e:
         load_config(tmp_path / "d.yaml")
+    assert f"d.yaml:5: {expected.format(law=LAW)}" in str(e.value), str(e.value)

@@ -115,9 +115,6 @@ class LawSpec(BaseModel):
                     options[e.key] = given[e.key]   # text that names a parameter, for an option that is no parameter
                     continue
                 raise self._error(e, given, options, parameters, loc) from None
-        for key in law.parameters():
-            if isinstance(given.get(key), bool):   # YAML `yes`: a number to float(), not to the reader
-                raise FieldError(loc + (key,), given[key], "Input should be a number or the name of a parameter")
         return law
 
     def _error(self, e: registry.LawOptionError, given: Mapping[str, Any], options: Mapping[str, Any],

@@ -55,13 +55,18 @@ def make_friction_law(friction: str, options: Mapping[str, Any], values: Optiona
     Raises
     ------
     registry.LawOptionError
-        If the law rejects an option (its key is named when it can be told).
+        If the law rejects an option (its key is named when it can be told), or a
+        parameter is given as a boolean.
     """
     cls = registry.law_class(friction)
     accepted, _ = registry.accepted_options(cls)
     shared = {name: p for name, p in (values or {}).items() if name in accepted}
     kwargs = {**shared, **(forced or {}), **options}
     law = registry.make_law(cls, kwargs)
+    for key in law.parameters():
+        if isinstance(kwargs.get(key), bool):   # YAML's `yes`: a number to float(), not to the reader
+            raise registry.LawOptionError(key, kwargs[key], f"{key} = {kwargs[key]!r} must be a number, "
+                                                            f"not a boolean")
     return law if suffix is None else _per_contact(cls, law, kwargs, suffix)
 
 
