@@ -12,7 +12,7 @@ import sympy as sp
 import yaml
 
 from blademodel.components import Contact, Damper, HarmonicForce, Iwan, Jenkins, Mass, Param, Spring
-from blademodel.components.friction import Candidate, ContactContext, FrictionLaw
+from blademodel.components.friction import Candidate, ContactContext, FrictionLaw, registry
 from blademodel.components.parameter import Number, as_param
 from blademodel.config import BladedDisk, ConfigError, apply_overrides, load_config, load_model
 from blademodel.model import Model
@@ -132,6 +132,29 @@ def test_defaults_can_be_set_from_outside(tmp_path):
     out = apply_overrides(config, {"contacts.0.friction.mu": "0.4"})
     assert friction_values(out.build()) == {"mu_c12": 0.4, "kd_c12": 1e6, "mu_c23": 0.5, "kd_c23": 1e6}
     assert friction_values(config.build()) == {"mu_c12": 0.5, "kd_c12": 1e6, "mu_c23": 0.5, "kd_c23": 1e6}
+
+
+@pytest.fixture
+def registered(tmp_path, monkeypatch):
+    """``regularised`` registered by the entry point of a throw-away installed distribution."""
+    info = tmp_path / "site" / "routelaws-0.1.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: routelaws\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text(f"[{registry.ENTRY_POINT_GROUP}]\nregularised = {LAW}\n")
+    monkeypatch.syspath_prepend(str(tmp_path / "site"))
+    registry.refresh()
+    yield
+    monkeypatch.undo()
+    registry.refresh()
+
+
+def test_a_law_by_entry_point_name_takes_the_same_route(tmp_path, registered):
+    by_name = load_model(row_yaml(tmp_path, "{law: regularised, mu: 0.5}", "{law: regularised, mu: 0.3}"))
+    by_path = load_model(row_yaml(tmp_path, f'{{law: "{LAW}", mu: 0.5}}', f'{{law: "{LAW}", mu: 0.3}}', "p.yaml"))
+    assert friction_values(by_name) == {"mu_c12": 0.5, "v0_c12": 0.05, "mu_c23": 0.3, "v0_c23": 0.05}
+    assert by_name.structure_key() == by_path.structure_key()
+    with pytest.raises(ConfigError, match="contacts.1.friction.v0 = -1: regularised: v0 = -1.0 must be > 0.0"):
+        load_config(row_yaml(tmp_path, "{law: regularised}", "{law: regularised, v0: -1}"))
 
 
 # --- errors in YAML terms ----------------------------------------------------------------------
