@@ -101,9 +101,10 @@ def test_good_components_model_builds(tmp_path):
     ("{law: coulomb, mu: 0.5}", "{law: magic, mu: 0.5}",
      "m.yaml:23: contacts.0.friction.law = 'magic': unknown friction law 'magic'"),
     ("{law: coulomb, mu: 0.5}", "{law: coulomb, mu: -0.5}",
-     "m.yaml:23: contacts.0.friction.mu = -0.5: Input should be greater than or equal to 0"),
+     "m.yaml:23: contacts.0.friction.mu = -0.5: coulomb: mu = -0.5 must be >= 0.0"),
     ("{law: coulomb, mu: 0.5}", "{law: coulomb, kd: 1e6}",
-     "m.yaml:23: contacts.0.friction.kd = '1e6': Extra inputs are not permitted"),
+     "m.yaml:23: contacts.0.friction.kd = 1000000.0: coulomb: unknown option of Coulomb (known: mu, "
+     "stick_velocity_tol)"),
     ("    alpha: 1.0\n", "    alpha: 1.0\n    angle: 2\n",
      "m.yaml:22: contacts.0.angle = 2: Extra inputs are not permitted"),
     ("  - {name: 2, m: 0.085, dofs: [x]}", "  - {name: 2, m: 0.085, dofs: [x, z]}",
@@ -198,7 +199,7 @@ def test_config_error_is_a_value_error_with_line(tmp_path):
     assert info.value.line == 8 and info.value.path == str(path)
 
 
-def test_model_level_conflict_names_the_file(tmp_path):
+def test_symbol_conflict_names_both_fields(tmp_path):
     text = """
     model: components
     parameters: {m_1: 2}
@@ -207,7 +208,8 @@ def test_model_level_conflict_names_the_file(tmp_path):
       - {name: 2, m: m_1}
     """
     msg = error(tmp_path, text)
-    assert "parameter m_1 is shared with two values" in msg
+    assert ("m.yaml:5: masses.1.m = 2.0: its symbol m_1 already stands for 1.0 at masses.0.m; declare the values "
+            "under 'parameters:' and write their names in these fields") in msg, msg
 
 
 # --- friction laws ---------------------------------------------------------------------
@@ -240,7 +242,8 @@ def test_external_friction_law_bad_keyword(tmp_path):
     text = GOOD.replace("{law: coulomb, mu: 0.5}",
                         '{law: "blademodel.components.friction.coulomb:Coulomb", bogus: 1}')
     msg = error(tmp_path, text)
-    assert "m.yaml:23: contacts.0.friction:" in msg and "bogus" in msg, msg
+    assert ("m.yaml:23: contacts.0.friction.bogus = 1: blademodel.components.friction.coulomb:Coulomb: "
+            "unknown option of Coulomb (known: mu, stick_velocity_tol)") in msg, msg
 
 
 # --- overrides -------------------------------------------------------------------------

@@ -226,7 +226,7 @@ def test_friction_options_reach_the_law(tmp_path):
     law = load_model(path).contacts[0].friction
     assert isinstance(law, Iwan) and law.elements == 3 and law.parameters()["mu"].name == "mu"
     path = components_yaml(tmp_path, "friction: {law: iwan, elements: -1}")
-    with pytest.raises(ConfigError, match="contacts.0.friction: elements = -1: friction: elements = -1 must be"):
+    with pytest.raises(ConfigError, match="contacts.0.friction.elements = -1: iwan: elements = -1 must be"):
         load_config(path)
 
 

@@ -75,7 +75,9 @@ class BladedDisk(_Strict):
     that blade (``m3``); mistuned stiffnesses are ``kx<n>``, ``ky<n>`` for every
     blade; phases are ``phi1`` ... ``phiN``; a contact value set in ``contacts``
     is ``<symbol>_c<n>`` for that contact (``Delta_c3``, ``k_c3`` for its gamma,
-    ``mu_c3``). Which names exist depends only on which fields are set, so a
+    ``mu_c3``), as is every parameter of a contact's own law (``friction`` or
+    ``friction_options`` set for that contact) other than ``mu`` and ``kd``
+    (``mu_s_c3``). Which names exist depends only on which fields are set, so a
     sweep over a value keeps one compiled kernel.
     """
 
@@ -220,13 +222,21 @@ class BladedDisk(_Strict):
     def friction_law(self, contact: Optional[int] = None) -> FrictionLaw:
         """The friction law of contact ``contact`` (``None``: of a contact without overrides).
 
+        A contact that sets its own ``friction`` or ``friction_options`` has its own
+        law: its parameters other than the shared ``mu``, ``kd`` are named
+        ``<symbol>_c<n>`` (``mu_s_c3``), so contacts with their own values never share
+        a symbol; the disk's law and options keep the shared symbols.
+
         Raises
         ------
         registry.LawOptionError
             If the law rejects an option (its key is named when it can be told).
         """
         law, options = self.contact_law(contact)
-        return make_friction_law(law, options, {n: self._contact_param(contact, n) for n in ("mu", "kd")})
+        own = self._override(contact)
+        own_law = own is not None and (own.friction is not None or own.friction_options is not None)
+        return make_friction_law(law, options, {n: self._contact_param(contact, n) for n in ("mu", "kd")},
+                                 suffix=f"c{contact + 1}" if own_law else None)
 
     # --- model ---------------------------------------------------------------------------
     def _override(self, i: Optional[int]) -> Optional[ContactValues]:

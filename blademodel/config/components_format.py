@@ -7,7 +7,7 @@ force's ``type`` is ``harmonic`` (the default), ``constant`` or
 Every numeric field takes a number or the name of an entry of ``parameters:``;
 fields naming the same parameter share one symbol (``omega`` of two forces, say).
 A plain number gets the component's default symbol (``m_1``, ``k_x1``, ``Delta_c``;
-friction values ``mu_<contact>``).
+a friction law's values ``<symbol>_<contact>``, ``mu_c``, see :mod:`.friction_format`).
 
 Example::
 
@@ -36,8 +36,8 @@ from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_val
 from ..components import (Contact, ConstantForce, Damper, Harmonic, HarmonicForce, Mass, MultiHarmonicForce, Param,
                           Spring, coordinate_name)
 from ..model import Model
-from .errors import FieldError
-from .friction_format import FrictionSpec, NoFrictionSpec
+from .errors import FieldError, format_loc
+from .friction_format import FrictionSpec, LawSpec
 from .values import Name, field_bound, number
 
 #: The name of the fixed surface in ``contacts[].bodies``.
@@ -166,7 +166,7 @@ class ContactSpec(_Spec):
     gap: number()
     alpha: number()
     k: number(ge=0)
-    friction: FrictionSpec = Field(default_factory=lambda: NoFrictionSpec(law="none"))
+    friction: FrictionSpec = Field(default_factory=lambda: LawSpec(law="none"))
 
     @field_validator("name")
     @classmethod
@@ -273,6 +273,28 @@ class ComponentsModel(_Spec):
             return Param(value, self.parameters[value]) if value in self.parameters else value
         return Param(default, value) if default else value
 
+    def _symbols(self, groups: dict[str, list]):
+        """``(field path, Param)`` of every parameter of the built components, their friction laws' included."""
+        for group, comps in groups.items():
+            for i, (spec, comp) in enumerate(zip(getattr(self, group), comps)):
+                owners = [((group, i), spec, comp)]
+                if isinstance(comp, Contact):
+                    owners.append(((group, i, "friction"), spec.friction, comp.friction))
+                for loc, owner_spec, owner in owners:
+                    written = set(type(owner_spec).model_fields) | set(owner_spec.model_extra or {})
+                    for key, p in owner.parameters().items():
+                        yield (loc + (key,) if key in written else loc), p
+
+    def _check_symbols(self, groups: dict[str, list]):
+        """Refuse one symbol standing for two values, naming both fields (the model would say it in Python terms)."""
+        seen: dict[str, tuple[float, tuple]] = {}
+        for where, p in self._symbols(groups):
+            value, other = seen.setdefault(p.name, (p.value, where))
+            if value != p.value:
+                raise FieldError(where, p.value, f"its symbol {p.name} already stands for {value} at "
+                                                 f"{format_loc(other)}; declare the values under 'parameters:' "
+                                                 f"and write their names in these fields")
+
     def build(self) -> Model:
         """The :class:`~blademodel.model.Model` of these components.
 
@@ -296,10 +318,12 @@ class ComponentsModel(_Spec):
         forces = [make(("forces", i), f.build, P, masses[f.mass]) for i, f in enumerate(self.forces)]
         contacts = []
         for i, c in enumerate(self.contacts):
-            law = make(("contacts", i, "friction"), c.friction.build, P, c.name)
+            law = c.friction.build(self.parameters, c.name, loc=("contacts", i, "friction"))
             b1, b2 = c.bodies
             contacts.append(make(("contacts", i), Contact, masses[b1], None if b2 == GROUND else masses[b2],
                                  gap=P(c.gap), alpha=P(c.alpha), k=P(c.k), friction=law, name=c.name))
+        self._check_symbols({"masses": list(masses.values()), "springs": springs, "dampers": dampers,
+                             "forces": forces, "contacts": contacts})
         try:
             return Model(tuple(masses.values()), tuple(springs), tuple(dampers), tuple(forces),
                          tuple(contacts), name=self.name)

@@ -158,7 +158,11 @@ class FrictionLaw(ABC):
     (checked with :func:`~blademodel.components.parameter.as_param`, whose errors name the field as
     ``"friction: <field> = <value> ..."``) and structural options; the config
     layer passes ``friction_options`` and the keys of a YAML ``friction:`` block
-    to the constructor by name and reports a rejected one at its field.
+    to the constructor by name and reports a rejected one at its field. It names a
+    parameter given as a plain number per contact (``mu_c2``) by passing it back as
+    a :class:`~blademodel.components.parameter.Param` under its key in
+    :meth:`parameters`, so those keys should be constructor keyword arguments
+    (:mod:`blademodel.config.friction_law`).
 
     Attributes
     ----------

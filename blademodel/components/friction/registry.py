@@ -169,6 +169,18 @@ def _signature_options(cls: type) -> tuple[tuple[str, ...], bool]:
     return names, any(p.kind is p.VAR_KEYWORD for p in params)
 
 
+def numeric_defaults(cls: type) -> dict[str, float]:
+    """The constructor's keyword arguments whose defaults are numbers (``{"mu": 0.5, "kd": 1e6}``)."""
+    return dict(_numeric_defaults(cls))
+
+
+@functools.lru_cache(maxsize=256)
+def _numeric_defaults(cls: type) -> tuple[tuple[str, float], ...]:
+    params = inspect.signature(cls).parameters.values()
+    return tuple((p.name, p.default) for p in params
+                 if isinstance(p.default, (int, float)) and not isinstance(p.default, bool))
+
+
 def make_law(cls: type, options: Mapping[str, Any]) -> FrictionLaw:
     """``cls(**options)``, with errors that name the offending option.
 
