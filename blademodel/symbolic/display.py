@@ -236,6 +236,9 @@ def latex(system: System, mode: Optional[str] = None) -> str:
 # --- one contact's own equations -------------------------------------------------------------
 
 _DIRECTION = {-1: "falls through 0", 1: "rises through 0", 0: "crosses 0"}
+_NORMAL_NOTE = {"spring": "normal force while closed, 0 while open",
+                "damped": "normal force while closed (>= 0: it opens when N falls through 0), 0 while open",
+                "load": "constant normal load: closed from the start, never opens"}
 
 
 def _contact_sub(ce: ContactEquations) -> dict:
@@ -273,16 +276,21 @@ def _contact_rows(ce: ContactEquations) -> list[tuple]:
     delta = sp.Symbol(f"delta_{ce.name}")
     r = sp.Symbol(f"r_{ce.name}")
 
+    named = {ce.penetration: delta}
+    if ce.normal_kind == "damped":
+        named[ce.penetration_rate] = sp.Symbol(f"deltadot_{ce.name}")
+
     def X(expr):
         expr = sp.sympify(expr)
-        return delta if expr == ce.penetration else expr.xreplace(sub)
+        return delta if expr == ce.penetration else expr.xreplace(named).xreplace(sub)
 
     rows = [("eq", sp.Eq(delta, X(ce.penetration.xreplace(sub)), evaluate=False),
              "penetration: closed while positive"),
             ("eq", sp.Eq(r, X(ce.slip), evaluate=False), "relative slip"),
             ("eq", sp.Eq(ce.v, X(ce.definitions[ce.v]), evaluate=False), "relative slip velocity, dr/dt"),
-            ("eq", sp.Eq(ce.N, sp.Mul(ce.k, delta, evaluate=False), evaluate=False),
-             "normal force while closed, 0 while open")]
+            ("eq", sp.Eq(ce.N, sp.Mul(ce.k, delta, evaluate=False) if ce.normal_kind == "spring"
+                         else X(ce.definitions[ce.N]), evaluate=False),
+             _NORMAL_NOTE[ce.normal_kind])]
     if _uses_Ndot(ce):
         rows.append(("eq", sp.Eq(ce.Ndot, X(ce.definitions[ce.Ndot]), evaluate=False), "dN/dt while closed"))
     for m in ce.modes:
