@@ -14,6 +14,7 @@ at ``tan(wd t) = -2 zeta s / (1 - 2 zeta^2)``, where the rebound velocity is exa
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import sympy as sp
@@ -200,3 +201,31 @@ def test_contact_rejects_inconsistent_normal_laws():
         Contact(b, None, gap=0.0, alpha=0.0, k=1.0, damping=-1.0)
     with pytest.raises(ValueError, match="contact c: gap is required"):
         Contact(b, None, alpha=0.0, k=1.0)
+
+
+def test_components_yaml_takes_damping_and_normal_load(tmp_path):
+    text = """
+model: components
+name: damper
+parameters: {cn: 12.0}
+masses: [{name: m, m: 1.0, dofs: [x]}]
+springs: [{a: x_m, k: 1e4}]
+contacts:
+  - {name: wall, bodies: [m, ground], gap: 1e-3, alpha: 1.5707963267948966, k: 1e5, damping: cn}
+  - {name: d, bodies: [m, ground], alpha: 0, normal_load: 10, friction: {law: coulomb, mu: 0.3}}
+"""
+    path = tmp_path / "m.yaml"
+    path.write_text(text)
+    model = load_model(str(path))
+    wall, d = model.contacts
+    assert wall.normal_kind == "damped" and wall.parameters()["damping"] == Param("cn", 12.0)
+    assert d.normal_kind == "load" and d.parameters()["normal_load"].value == 10.0
+    for bad, edit, message in (
+            ("normal_load: 10", "normal_load: 0", "contacts.1.normal_load = 0: Input should be greater than 0"),
+            ("normal_load: 10", "normal_load: 10, k: 5", "contacts.1: contact d: k = 5.0 cannot be given with "
+                                                         "normal_load"),
+            ("damping: cn", "damping: -1", "contacts.0.damping = -1: Input should be greater than or equal to 0"),
+            (", k: 1e5", "", "contacts.0: contact wall: k is required")):
+        path.write_text(text.replace(bad, edit, 1))
+        with pytest.raises(ValueError, match=re.escape(message)):
+            load_model(str(path))

@@ -19,6 +19,13 @@ Example::
     contacts:
       - {name: c, bodies: [m, ground], gap: -1e-4, alpha: 0, k: 4e5,
          friction: {law: coulomb, mu: 0.5}}
+
+A contact may add a normal ``damping`` (``N = k delta + damping ddelta/dt``, the
+contact opening when ``N`` falls to zero), or replace ``gap`` and ``k`` by a
+constant ``normal_load`` (a friction damper that never lifts off)::
+
+      - {name: d, bodies: [m, ground], alpha: 0, normal_load: 10,
+         friction: {law: jenkins, mu: 0.3, kd: 1e4}}
 """
 
 from __future__ import annotations
@@ -92,13 +99,20 @@ class ForceSpec(_Spec):
 
 
 class ContactSpec(_Spec):
-    """A gapped contact between two masses, or a mass and ``ground``."""
+    """A contact between two masses, or a mass and ``ground``.
+
+    A gapped contact gives ``gap`` and ``k`` (and optionally the normal
+    ``damping``); a friction contact pressed with a constant force gives
+    ``normal_load`` instead (see :class:`~blademodel.components.Contact`).
+    """
 
     name: str
     bodies: list[Name] = Field(min_length=2, max_length=2)
-    gap: number()
+    gap: number() = None
     alpha: number()
-    k: number(ge=0)
+    k: number(ge=0) = None
+    damping: number(ge=0) = 0.0
+    normal_load: number(gt=0) = None
     friction: FrictionSpec = Field(default_factory=lambda: NoFrictionSpec(law="none"))
 
     @field_validator("name")
@@ -232,8 +246,9 @@ class ComponentsModel(_Spec):
         for i, c in enumerate(self.contacts):
             law = make(("contacts", i, "friction"), c.friction.build, P, c.name)
             b1, b2 = c.bodies
+            optional = {f: P(getattr(c, f)) for f in ("gap", "k", "normal_load") if getattr(c, f) is not None}
             contacts.append(make(("contacts", i), Contact, masses[b1], None if b2 == GROUND else masses[b2],
-                                 gap=P(c.gap), alpha=P(c.alpha), k=P(c.k), friction=law, name=c.name))
+                                 alpha=P(c.alpha), friction=law, name=c.name, damping=P(c.damping), **optional))
         try:
             return Model(tuple(masses.values()), tuple(springs), tuple(dampers), tuple(forces),
                          tuple(contacts), name=self.name)
