@@ -25,8 +25,11 @@ from blademodel.config import load_model
 from blademodel.model import Model
 from blademodel.numeric import simulate
 from blademodel.numeric.energy import energy_balance
+from blademodel.numeric.kernels import make_integrator
+from blademodel.numeric.tangent import flow_sensitivity
 from blademodel.symbolic.assembly import contact_equations, derive
 from blademodel.symbolic.display import pretty_contact
+from test_tangent import _differences   # central differences of the kernel's map
 
 KERNELS = ("product", "contact")
 
@@ -229,3 +232,21 @@ contacts:
         path.write_text(text.replace(bad, edit, 1))
         with pytest.raises(ValueError, match=re.escape(message)):
             load_model(str(path))
+
+
+@pytest.mark.parametrize("case", ["damped coulomb", "damped jenkins", "load coulomb"])
+def test_tangent_monodromy_equals_differences(case):
+    """The product-mode kernel's tangent differentiates through the new guards (a damped contact's
+    opening at ``N = 0``, its Piecewise closing guard, Jenkins' ``Ndot`` with accelerations)."""
+    model = {"damped coulomb": lambda: pair_like(damping=30.0),
+             "damped jenkins": lambda: pair_like(damping=30.0, law=Jenkins(0.3, 2e5)),
+             "load coulomb": lambda: pair_like(normal_load=3.0)}[case]()
+    ig = make_integrator(model, steps_per_period=1000, event_tol=1e-13, event_location="predicted")
+    y = ig.initial_state()
+    status, mode, _ = ig.advance(y, ig.mode_of(y), 0, 20)
+    assert status == 0
+    y = y[:ig.n_physical].copy()
+    s = flow_sensitivity(ig, y, mode, 2)
+    assert s.events >= 4
+    J = _differences(ig, y, mode, 2)
+    assert np.max(np.abs(s.monodromy - J)) < 1e-6 * np.max(np.abs(s.monodromy))
