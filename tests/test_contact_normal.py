@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import sympy as sp
@@ -250,3 +251,19 @@ def test_tangent_monodromy_equals_differences(case):
     assert s.events >= 4
     J = _differences(ig, y, mode, 2)
     assert np.max(np.abs(s.monodromy - J)) < 1e-6 * np.max(np.abs(s.monodromy))
+
+
+def test_normal_load_replaces_the_preloaded_ground_contact(tmp_path):
+    """``models/friction_oscillator.yaml`` presses its mass with a preload (N = -kc Delta = 20 N);
+    ``normal_load: 20`` is the same oscillator, to rounding."""
+    source = (Path(__file__).resolve().parents[1] / "models" / "friction_oscillator.yaml").read_text()
+    old = "    gap: Delta      # a preload: N = -kc * Delta = 20 N, constant\n    k: kc\n"
+    assert old in source
+    path = tmp_path / "loaded.yaml"
+    path.write_text(source.replace(old, "    normal_load: 20.0\n"))
+    preload = load_model(str(Path(__file__).resolve().parents[1] / "models" / "friction_oscillator.yaml"))
+    loaded = load_model(str(path))
+    assert loaded.contacts[0].normal_kind == "load"
+    a, b = (simulate(m, periods=8, steps_per_period=1000) for m in (preload, loaded))
+    assert a.counters["events"] == b.counters["events"] > 8
+    np.testing.assert_allclose(b.y[:, :2], a.y[:, :2], rtol=0, atol=1e-12 * np.abs(a.y[:, :2]).max())
