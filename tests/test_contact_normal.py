@@ -229,7 +229,7 @@ contacts:
             ("normal_load: 10", "normal_load: 10, k: 5", "contacts.1: contact d: k = 5.0 cannot be given with "
                                                          "normal_load"),
             ("damping: cn", "damping: -1", "contacts.0.damping = -1: Input should be greater than or equal to 0"),
-            (", k: 1e5", "", "contacts.0: contact wall: k is required")):
+            (", k: 1e5", "", "contacts.0.k: Field required (or give normal_load")):
         path.write_text(text.replace(bad, edit, 1))
         with pytest.raises(ValueError, match=re.escape(message)):
             load_model(str(path))

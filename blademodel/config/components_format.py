@@ -108,11 +108,11 @@ class ContactSpec(_Spec):
 
     name: str
     bodies: list[Name] = Field(min_length=2, max_length=2)
-    gap: number() = None
+    gap: number(optional=True) = None
     alpha: number()
-    k: number(ge=0) = None
+    k: number(ge=0, optional=True) = None
     damping: number(ge=0) = 0.0
-    normal_load: number(gt=0) = None
+    normal_load: number(gt=0, optional=True) = None
     friction: FrictionSpec = Field(default_factory=lambda: NoFrictionSpec(law="none"))
 
     @field_validator("name")
@@ -186,6 +186,10 @@ class ComponentsModel(_Spec):
                     raise FieldError(("contacts", i, "bodies", j), b, f"unknown body (known: {known})")
             if c.bodies[0] == c.bodies[1]:
                 raise FieldError(("contacts", i, "bodies", 1), c.bodies[1], "a body cannot touch itself")
+            for f in ("gap", "k"):
+                if c.normal_load is None and getattr(c, f) is None:
+                    raise FieldError(("contacts", i, f), None, "Field required (or give normal_load for a "
+                                                                "contact pressed with a constant force)")
 
     def _references(self):
         """``(loc, name, bound)`` of every numeric field that names a parameter."""

@@ -34,6 +34,7 @@ def _time_functions(system: System) -> tuple[sp.Symbol, dict]:
         f = dynamicsymbols(q.name)
         sub[q] = f
         sub[u] = f.diff(t)
+        sub[sp.Symbol(f"a{q.name}", real=True)] = f.diff(t, 2)   # in a damped contact's Ndot
     for s in system.s:
         sub[s] = dynamicsymbols(s.name)
     return t, sub
@@ -249,6 +250,7 @@ def _contact_sub(ce: ContactEquations) -> dict:
         f = dynamicsymbols(q.name)
         sub[q] = f
         sub[u] = f.diff(t)
+        sub[sp.Symbol(f"a{q.name}", real=True)] = f.diff(t, 2)   # in a damped contact's Ndot
     for s in ce.states.values():
         sub[s] = dynamicsymbols(s.name)
     return sub
@@ -276,7 +278,8 @@ def _contact_rows(ce: ContactEquations) -> list[tuple]:
     delta = sp.Symbol(f"delta_{ce.name}")
     r = sp.Symbol(f"r_{ce.name}")
 
-    named = {ce.penetration: delta}
+    # a damped contact's guards and N read in delta and its rate
+    named = {} if ce.normal_kind == "spring" else {ce.penetration: delta}
     if ce.normal_kind == "damped":
         named[ce.penetration_rate] = sp.Symbol(f"deltadot_{ce.name}")
 
