@@ -267,3 +267,29 @@ def test_normal_load_replaces_the_preloaded_ground_contact(tmp_path):
     a, b = (simulate(m, periods=8, steps_per_period=1000) for m in (preload, loaded))
     assert a.counters["events"] == b.counters["events"] > 8
     np.testing.assert_allclose(b.y[:, :2], a.y[:, :2], rtol=0, atol=1e-12 * np.abs(a.y[:, :2]).max())
+
+
+def test_damping_refuses_a_law_whose_force_uses_Ndot():
+    from blademodel.components.friction.base import Candidate, FrictionLaw
+
+    class RateFriction(FrictionLaw):
+        """A (made-up) friction force proportional to dN/dt: an algebraic loop with damping."""
+        modes = ("slip",)
+
+        def parameters(self):
+            return {"eta": Param("eta", 0.1)}
+
+        def force(self, mode, ctx):
+            return ctx.params["eta"] * ctx.Ndot
+
+        def guards(self, mode, ctx):
+            return []
+
+        def entry(self, ctx):
+            return [Candidate("slip")]
+
+    b = Mass("1", 1.0, ("x",))
+    Contact(b, None, gap=0.0, alpha=0.0, k=1.0, friction=RateFriction())      # fine without damping
+    with pytest.raises(ValueError, match="contact c: damping is not supported with the RateFriction law, whose "
+                                         "friction force in mode 'slip' uses Ndot"):
+        Contact(b, None, gap=0.0, alpha=0.0, k=1.0, damping=2.0, friction=RateFriction())

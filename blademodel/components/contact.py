@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 from ._sympy import sp
 
-from .friction.base import FrictionLaw
+from .friction.base import STICK, ContactContext, FrictionLaw
 from .friction.none import NoFriction
 from .friction.validation import FrictionLawError, check_law
 from .mass import Mass
@@ -53,7 +53,9 @@ class Contact:
         of the state. The spring stores ``k max(delta, 0)^2 / 2`` in *every*
         mode (a separation at ``N = 0`` leaves ``delta > 0``), and the contact
         dissipates ``c_n (ddelta/dt)^2`` while closed and ``-k delta ddelta/dt``
-        (``>= 0`` there) while open with ``delta > 0``.
+        (``>= 0`` there) while open with ``delta > 0``. A law's ``Ndot`` is then
+        ``k ddelta/dt + c_n d2delta/dt2``, so its friction *force* must not use
+        it (none of the built-in laws does; its rates and guards may).
     ``load`` (``normal_load`` ``N0``, no ``gap``, ``k`` nor ``damping``)
         A friction contact pressed with a fixed force, ``N = N0 > 0``: it is closed
         from the start and never opens (a friction damper under a known normal
@@ -140,6 +142,23 @@ class Contact:
             p["normal_load"] = as_param(self.normal_load, f"N0_{n}", field=f"contact {n}: normal_load",
                                         minimum=0.0, strict=True)
         object.__setattr__(self, "_p", p)
+        if self.normal_kind == "damped":
+            self._check_force_without_Ndot()
+
+    def _check_force_without_Ndot(self):
+        """A damped contact's ``Ndot`` needs the accelerations, which its friction force must not need."""
+        Ndot = sp.Symbol("Ndot", real=True)
+        ctx = ContactContext(N=sp.Symbol("N", real=True), Ndot=Ndot, v=sp.Symbol("v", real=True),
+                             f=sp.Symbol("f", real=True),
+                             states={st: sp.Symbol(f"_state_{st}", real=True) for st in self.friction.states},
+                             params={k: p.symbol for k, p in self.friction.parameters().items()})
+        for mode in self.friction.modes:
+            force = self.friction.force(mode, ctx)
+            if force is not STICK and sp.sympify(force).has(Ndot):
+                raise ValueError(f"contact {self.name}: damping is not supported with the "
+                                 f"{type(self.friction).__name__} law, whose friction force in mode {mode!r} "
+                                 f"uses Ndot (with damping dN/dt depends on the accelerations, which depend "
+                                 f"on the friction force)")
 
     @property
     def normal_kind(self) -> str:
