@@ -164,7 +164,6 @@ def test_kernels_agree_on_a_constant_load_friction_contact():
 
 def test_symbolic_forms():
     damped = pair_like(damping=Param("cn", 30.0))
-    c = damped.contacts[0]
     hs = derive(damped)
     N = hs.mode("slip+").normal_forces[0]
     x, y, vx, vy = (sp.Symbol(n, real=True) for n in ("x_b", "y_b", "vx_b", "vy_b"))

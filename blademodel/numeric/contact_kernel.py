@@ -135,8 +135,8 @@ def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4") -> tup
     ints = pack([Kp, Ki, Cp, Ci, fi, fg, tables.cidx, tables.claw, tables.cso, tables.LP, Wp, Wi, tables.cnk],
                 [*range(contract.O_KP, contract.O_WI + 1), contract.O_CNK], np.int64, contract.H_SIZE)
     R = pack([tables.invm, Kv, Cv, fs, fc, om, tables.cgn, tables.cgr, tables.cgap, tables.ck, tables.p, tables.W,
-              tableau, tables.cc, tables.cn0], [*range(contract.R_INVM, contract.R_RK + 1), contract.R_CC, contract.R_N0],
-             np.float64, 0)
+              tableau, tables.cc, tables.cn0],
+             [*range(contract.R_INVM, contract.R_RK + 1), contract.R_CC, contract.R_N0], np.float64, 0)
     sizes = [n] + [m] * 9 + [contract.MAX_GROUPS, contract.MAX_GROUPS, contract.MAX_LAW_STATES, n_state, m * m,
                              m, 1, n, m]
     WF = pack([np.zeros(k) for k in sizes],

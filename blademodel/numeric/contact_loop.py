@@ -25,8 +25,9 @@ needs (no copies; every function is compiled without reference counting, see
 ``R``: ``invm`` (inverse masses), ``Kv``, ``Cv`` (CSR values), ``fs, fc`` (forcing
 ``fs sin(w t) + fc cos(w t)``), ``om`` (group frequencies), ``cgn, cgr`` (gradients
 of the penetration and of the relative slip, ``(nc, 4)``), ``cgap``, ``ck`` (gap,
-normal stiffness), ``cc``, ``cn0`` (normal damping, constant normal load), ``p`` (parameter values), ``W`` (Delassus matrix ``G M^-1 G^T`` of
-the tangential directions, ``(nc, nc)``).
+normal stiffness), ``cc``, ``cn0`` (normal damping, constant normal load), ``p``
+(parameter values), ``W`` (Delassus matrix ``G M^-1 G^T`` of the tangential
+directions, ``(nc, nc)``).
 
 ``WI``: ``[ns, null pivot or -1]``, then ``nc`` each: ``sl`` (the sticking rigid
 contacts, ascending), ``env`` (first column of each row of the stick matrix's
