@@ -70,12 +70,12 @@ class Model:
 
     @property
     def length_scale(self) -> float | None:
-        """Scale of non-dimensional displacements, ``X1 = x1 / gap``: the first contact's gap.
+        """Scale of non-dimensional displacements, ``X1 = x1 / gap``: the first gapped contact's gap.
 
-        ``None`` without contacts or with a zero gap (then outputs stay in metres).
+        ``None`` without gapped contacts or with a zero gap (then outputs stay in metres).
         """
-        gap = self.contacts[0].parameters()["gap"].value if self.contacts else 0.0
-        return gap or None
+        gaps = [c.parameters()["gap"].value for c in self.contacts if "gap" in c.parameters()]
+        return (gaps[0] if gaps else 0.0) or None
 
     @property
     def coordinates(self) -> tuple[str, ...]:

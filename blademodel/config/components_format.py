@@ -25,6 +25,13 @@ Example::
     contacts:
       - {name: c, bodies: [m, ground], gap: -1e-4, alpha: 0, k: 4e5,
          friction: {law: coulomb, mu: 0.5}}
+
+A contact may add a normal ``damping`` (``N = k delta + damping ddelta/dt``, the
+contact opening when ``N`` falls to zero), or replace ``gap`` and ``k`` by a
+constant ``normal_load`` (a friction damper that never lifts off)::
+
+      - {name: d, bodies: [m, ground], alpha: 0, normal_load: 10,
+         friction: {law: jenkins, mu: 0.3, kd: 1e4}}
 """
 
 from __future__ import annotations
@@ -159,13 +166,20 @@ ForceSpec = Annotated[Union[tuple(Annotated[cls, Tag(tag)] for tag, cls in FORCE
 
 
 class ContactSpec(_Spec):
-    """A gapped contact between two masses, or a mass and ``ground``."""
+    """A contact between two masses, or a mass and ``ground``.
+
+    A gapped contact gives ``gap`` and ``k`` (and optionally the normal
+    ``damping``); a friction contact pressed with a constant force gives
+    ``normal_load`` instead (see :class:`~blademodel.components.Contact`).
+    """
 
     name: str
     bodies: list[Name] = Field(min_length=2, max_length=2)
-    gap: number()
+    gap: number(optional=True) = None
     alpha: number()
-    k: number(ge=0)
+    k: number(ge=0, optional=True) = None
+    damping: number(ge=0) = 0.0
+    normal_load: number(gt=0, optional=True) = None
     friction: FrictionSpec = Field(default_factory=lambda: LawSpec(law="none"))
 
     @field_validator("name")
@@ -239,6 +253,10 @@ class ComponentsModel(_Spec):
                     raise FieldError(("contacts", i, "bodies", j), b, f"unknown body (known: {known})")
             if c.bodies[0] == c.bodies[1]:
                 raise FieldError(("contacts", i, "bodies", 1), c.bodies[1], "a body cannot touch itself")
+            for f in ("gap", "k"):
+                if c.normal_load is None and getattr(c, f) is None:
+                    raise FieldError(("contacts", i, f), None, "Field required (or give normal_load for a "
+                                                                "contact pressed with a constant force)")
 
     def _references(self):
         """``(loc, name, bound)`` of every numeric field that names a parameter."""
@@ -320,8 +338,9 @@ class ComponentsModel(_Spec):
         for i, c in enumerate(self.contacts):
             law = c.friction.build(self.parameters, c.name, loc=("contacts", i, "friction"))
             b1, b2 = c.bodies
+            optional = {f: P(getattr(c, f)) for f in ("gap", "k", "normal_load") if getattr(c, f) is not None}
             contacts.append(make(("contacts", i), Contact, masses[b1], None if b2 == GROUND else masses[b2],
-                                 gap=P(c.gap), alpha=P(c.alpha), k=P(c.k), friction=law, name=c.name))
+                                 alpha=P(c.alpha), friction=law, name=c.name, damping=P(c.damping), **optional))
         self._check_symbols({"masses": list(masses.values()), "springs": springs, "dampers": dampers,
                              "forces": forces, "contacts": contacts})
         try:

@@ -64,7 +64,7 @@ def parse_number_or_name(value: Any, bound: Bound = Bound()) -> Union[float, str
     return x
 
 
-def number(*, gt: Optional[float] = None, ge: Optional[float] = None):
+def number(*, gt: Optional[float] = None, ge: Optional[float] = None, optional: bool = False):
     """Annotated type of a numeric field that may name a parameter instead.
 
     Parameters
@@ -72,8 +72,13 @@ def number(*, gt: Optional[float] = None, ge: Optional[float] = None):
     gt, ge : float, optional
         Exclusive / inclusive lower bound, checked on numbers here and on the
         parameter's value when the field names a parameter.
+    optional : bool
+        Also accept ``None`` (a field left out; a dumped config holds it as ``null``).
     """
     b = Bound(gt, ge)
+    if optional:
+        return Annotated[Optional[Union[float, str]],
+                         PlainValidator(lambda v: None if v is None else parse_number_or_name(v, b)), b]
     return Annotated[Union[float, str], PlainValidator(lambda v: parse_number_or_name(v, b)), b]
 
 

@@ -179,8 +179,10 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
     for mode in system.modes:
         f = [*system.u, *mode.accelerations, *mode.state_rates]
         if energy:
-            f += [system.energy["input_power"], system.energy["viscous_power"],
-                  system.energy["friction_power"][system.modes.index(mode)]]
+            m = system.modes.index(mode)
+            # a contact's normal damping counts as viscous (its power is 0 without one: same code)
+            f += [system.energy["input_power"], system.energy["viscous_power"] + system.energy["contact_power"][m],
+                  system.energy["friction_power"][m]]
         flows.append([hoist(e) for e in f])
         guards.append([hoist(g.expr) for g in mode.guards])
         transitions.append([[(c.target, hoist(c.condition), {s: hoist(e) for s, e in c.reset.items()})

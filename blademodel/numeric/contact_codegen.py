@@ -27,7 +27,7 @@ _ENTRY_POINTS = ("integrate", "initial_modes", "rhs", "factor_stick", "contact_f
 _VIEWS = ("vec", "mat", "wvec", "law_offset")
 
 _TEMPLATE_FUNCTIONS = ("runtime", "vec", "mat", "wvec", "law_offset", "record", "factor_stick", "back_substitute", "solve_stick", "slip_bound", "least_cone_ratio",
-                       "contact_forces", "rates", "rhs", "rhs_guards", "rk4_step", "rk_step", "guards_of_forces", "eval_guards",
+                       "contact_forces", "penetration_acceleration", "normal_guard", "normal_guard_rate", "rates", "rhs", "rhs_guards", "rk4_step", "rk_step", "guards_of_forces", "eval_guards",
                        "crossed", "first_crossing", "cone_ratio", "first_near_crossing", "guard_rates",
                        "stick_force_rates", "stick_solution", "contact_rates",
                        "locate_trial", "copy_guards", "hermite", "hermite_root", "hermite_extremum",

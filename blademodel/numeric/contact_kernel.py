@@ -132,10 +132,11 @@ def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4") -> tup
     for j in range(nc):
         Wi += [k for k in range(nc) if k != j and W[j, k] != 0.0]
         Wp.append(len(Wi))
-    ints = pack([Kp, Ki, Cp, Ci, fi, fg, tables.cidx, tables.claw, tables.cso, tables.LP, Wp, Wi],
-                range(contract.O_KP, contract.O_WI + 1), np.int64, contract.H_SIZE)
+    ints = pack([Kp, Ki, Cp, Ci, fi, fg, tables.cidx, tables.claw, tables.cso, tables.LP, Wp, Wi, tables.cnk],
+                [*range(contract.O_KP, contract.O_WI + 1), contract.O_CNK], np.int64, contract.H_SIZE)
     R = pack([tables.invm, Kv, Cv, fs, fc, om, tables.cgn, tables.cgr, tables.cgap, tables.ck, tables.p, tables.W,
-              tableau], range(contract.R_INVM, contract.R_RK + 1), np.float64, 0)
+              tableau, tables.cc, tables.cn0],
+             [*range(contract.R_INVM, contract.R_RK + 1), contract.R_CC, contract.R_N0], np.float64, 0)
     sizes = [n] + [m] * 9 + [contract.MAX_GROUPS, contract.MAX_GROUPS, contract.MAX_LAW_STATES, n_state, m * m,
                              m, 1, n, m]
     WF = pack([np.zeros(k) for k in sizes],
@@ -408,8 +409,12 @@ class ContactIntegrator(Integrator):
         delta = np.array([sum(self.tables.cgn[j, k] * q[self.tables.cidx[j, k]] for k in range(4)
                               if self.tables.cidx[j, k] >= 0) - self.tables.cgap[j] for j in range(self.nc)])
         for j in range(self.nc):
-            if cm[j] != 0:
-                E += 0.5 * self.tables.ck[j] * delta[j] ** 2
+            kind = self.tables.cnk[j]
+            if kind == contract.NK_DAMPED:   # the spring holds k delta^2 / 2 in every mode (docs/components.md)
+                E += 0.5 * self.tables.ck[j] * max(delta[j], 0.0) ** 2
+            elif cm[j] != 0:
+                E += (self.tables.cn0[j] * delta[j] if kind == contract.NK_LOAD
+                      else 0.5 * self.tables.ck[j] * delta[j] ** 2)
             E += self.module.law_energy(self.kind[j], y, 2 * n + int(self.tables.cso[j]), self.R, self.I, j)
         return E
 

@@ -19,13 +19,15 @@ needs (no copies; every function is compiled without reference counting, see
 (forcing entries: coordinate, frequency group), ``cidx`` (contact slots, ``(nc, 4)``,
 -1 unused), ``claw`` (law kind), ``cso`` (offset of the law's states after ``q`` and
 ``u``), ``LP`` (the law's parameter indices into ``p``, ``(nc, LPW)``), ``Wp, Wi``
-(the contacts coupled to each contact through ``W``, CSR).
+(the contacts coupled to each contact through ``W``, CSR), ``cnk`` (each contact's normal law:
+``NK_SPRING``, ``NK_DAMPED``, ``NK_LOAD``).
 
 ``R``: ``invm`` (inverse masses), ``Kv``, ``Cv`` (CSR values), ``fs, fc`` (forcing
 ``fs sin(w t) + fc cos(w t)``), ``om`` (group frequencies), ``cgn, cgr`` (gradients
 of the penetration and of the relative slip, ``(nc, 4)``), ``cgap``, ``ck`` (gap,
-normal stiffness), ``p`` (parameter values), ``W`` (Delassus matrix ``G M^-1 G^T`` of
-the tangential directions, ``(nc, nc)``).
+normal stiffness), ``cc``, ``cn0`` (normal damping, constant normal load), ``p``
+(parameter values), ``W`` (Delassus matrix ``G M^-1 G^T`` of the tangential
+directions, ``(nc, nc)``).
 
 ``WI``: ``[ns, null pivot or -1]``, then ``nc`` each: ``sl`` (the sticking rigid
 contacts, ascending), ``env`` (first column of each row of the stick matrix's
@@ -70,6 +72,7 @@ from blademodel.numeric.contract import (C_LOCATION_SUBSTEPS, C_EVENTS, C_FRICTI
                                          F_V, F_X, F_YEV, F_Z, F_DR, F_T, F_FD, F_XD, H_N, H_NS, R_RK, SC_ROWS, H_NC, H_NF, H_NG, H_NLAW, MAX_LAW_STATES,
                                          O_CI, O_CIDX, O_CLAW, O_CP, O_CSO, O_FG, O_FI, O_KI, O_KP, O_WI, O_WP, R_CV, R_FC,
                                          R_FS, R_GAP, R_GN, R_GR, R_INVM, R_K, R_KV, R_OM, R_W, S_MAX_CONE_RATIO,
+                                         NK_DAMPED, NK_LOAD, NK_SPRING, O_CNK, R_CC, R_N0,
                                          STATUS_EVENT_STORM, STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE,
                                          STATUS_OK)
 
@@ -239,6 +242,7 @@ def contact_forces(t, y, cm, I, R, WI, WF):
     cidx, claw = mat(I, I, O_CIDX, nc, 4), vec(I, I, O_CLAW, nc)
     cgn, cgr = mat(R, I, R_GN, nc, 4), mat(R, I, R_GR, nc, 4)
     cgap, ck = vec(R, I, R_GAP, nc), vec(R, I, R_K, nc)
+    cnk, cc, cn0 = vec(I, I, O_CNK, nc), vec(R, I, R_CC, nc), vec(R, I, R_N0, nc)
     F = vec(WF, I, F_F, n)
     cN, cNd, cv, cf, cdl = (vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc),
                             vec(WF, I, F_FR, nc), vec(WF, I, F_DL, nc))
@@ -280,9 +284,17 @@ def contact_forces(t, y, cm, I, R, WI, WF):
             cNd[j] = 0.0
             cf[j] = 0.0
             continue
-        N = ck[j] * dl
+        nk = cnk[j]
+        if nk == NK_SPRING:
+            N = ck[j] * dl
+            cNd[j] = ck[j] * dd
+        elif nk == NK_DAMPED:
+            N = ck[j] * dl + cc[j] * dd
+            cNd[j] = ck[j] * dd   # completed below, once the accelerations are known
+        else:
+            N = cn0[j]
+            cNd[j] = 0.0
         cN[j] = N
-        cNd[j] = ck[j] * dd
         K = claw[j]
         f = 0.0
         if not IS_STICK[K, mode]:  # noqa: F821
@@ -306,7 +318,33 @@ def contact_forces(t, y, cm, I, R, WI, WF):
                 i = cidx[j, k]
                 if i >= 0:
                     F[i] -= xst[a] * cgr[j, k]
+    invm = vec(R, I, R_INVM, n)
+    for j in range(nc):
+        if cnk[j] == NK_DAMPED and cm[j] != 0:   # dN/dt = k ddelta/dt + c d2delta/dt2
+            cNd[j] += cc[j] * penetration_acceleration(j, F, invm, cidx, cgn)
     return power
+
+
+def penetration_acceleration(j, F, invm, cidx, cgn):
+    """``d2delta/dt2`` of contact ``j`` from the generalized forces ``F``."""
+    s = 0.0
+    for k in range(4):
+        i = cidx[j, k]
+        if i >= 0:
+            s += cgn[j, k] * invm[i] * F[i]
+    return s
+
+
+def normal_guard(j, mode, nk, dl, dd, N, ck, cc, cn0):
+    """The guard of contact ``j``'s normal law: the penetration (spring), the normal force (damped,
+    closed), ``k delta + c min(ddelta/dt, 0)`` (damped, open) or the constant load."""
+    if nk == NK_SPRING:
+        return dl
+    if nk == NK_LOAD:
+        return cn0[j]
+    if mode != 0:
+        return N
+    return ck[j] * dl + cc[j] * min(dd, 0.0)
 
 
 def rhs(t, y, cm, I, R, WI, WF, out):
@@ -341,6 +379,14 @@ def rates(y, cm, I, R, WI, WF, out, power):
             for e in range(Cp[i], Cp[i + 1]):
                 s += Cv[e] * y[n + Ci[e]]
             visc += y[n + i] * s
+        cnk, cc, ck = vec(I, I, O_CNK, nc), vec(R, I, R_CC, nc), vec(R, I, R_K, nc)
+        cdl, cdr = vec(WF, I, F_DL, nc), vec(WF, I, F_DR, nc)
+        for j in range(nc):
+            if cnk[j] == NK_DAMPED:   # the dashpot while closed; the spring's release while open
+                if cm[j] != 0:
+                    visc += cc[j] * cdr[j] * cdr[j]
+                elif cdl[j] > 0.0:
+                    visc -= ck[j] * cdl[j] * cdr[j]
         fric = 0.0
         for j in range(nc):
             if cm[j] != 0:
@@ -414,7 +460,7 @@ def rk_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1):
 
 # ---- guards -------------------------------------------------------------------------------
 def eval_guards(t, y, cm, I, R, WI, WF, G):
-    """Every contact's guards into ``G[j, :]``: 0 the penetration, then the law's."""
+    """Every contact's guards into ``G[j, :]``: 0 the normal law's (``normal_guard``), then the law's."""
     contact_forces(t, y, cm, I, R, WI, WF)
     guards_of_forces(y, cm, I, R, WF, G)
 
@@ -425,8 +471,10 @@ def guards_of_forces(y, cm, I, R, WF, G):
     claw = vec(I, I, O_CLAW, nc)
     cN, cNd, cv, cf, cdl = (vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc),
                             vec(WF, I, F_FR, nc), vec(WF, I, F_DL, nc))
+    cnk, cc, cn0, ck = vec(I, I, O_CNK, nc), vec(R, I, R_CC, nc), vec(R, I, R_N0, nc), vec(R, I, R_K, nc)
+    cdr = vec(WF, I, F_DR, nc)
     for j in range(nc):
-        G[j, 0] = cdl[j]
+        G[j, 0] = normal_guard(j, cm[j], cnk[j], cdl[j], cdr[j], cN[j], ck, cc, cn0)
         law_guards(claw[j], cm[j], cN[j], cNd[j], cv[j], cf[j], y, law_offset(I, j), R, I, j, G)  # noqa: F821
 
 
@@ -476,16 +524,38 @@ def guard_rates(y, dy, cm, I, R, WI, WF, D, with_stick):
     stick_known = with_stick and WI[0] > 0 and WI[1] < 0
     if stick_known:
         stick_force_rates(y, dy, cm, I, R, WI, WF)
+    cnk, cc = vec(I, I, O_CNK, nc), vec(R, I, R_CC, nc)
     for j in range(nc):
-        D[j, 0] = cdr[j]
+        D[j, 0] = normal_guard_rate(j, cm[j], cnk[j], cdr[j], cNd[j], dy, n, cidx, cgn, ck, cc)
         for gi in range(1, D.shape[1]):
             D[j, gi] = math.nan
         if cm[j] == 0:
             continue
         Ndd, vd = contact_rates(j, dy, n, cidx, cgn, cgr, ck)
+        if cnk[j] == NK_DAMPED:
+            Ndd = math.nan   # k d2delta/dt2 + c d3delta/dt3: the jerk is not known
         fd = xd[pos[j]] if stick_known and pos[j] >= 0 else math.nan
         law_guard_rates(claw[j], cm[j], cN[j], cNd[j], Ndd, cv[j], vd, cf[j], fd, y,  # noqa: F821
                         law_offset(I, j), R, I, j, dy, D)
+
+
+def normal_guard_rate(j, mode, nk, dd, Nd, dy, n, cidx, cgn, ck, cc):
+    """Time derivative of ``normal_guard`` (``Nd``: the closed contact's ``dN/dt``)."""
+    if nk == NK_SPRING:
+        return dd
+    if nk == NK_LOAD:
+        return 0.0
+    if mode != 0:
+        return Nd
+    r = ck[j] * dd
+    if dd < 0.0:
+        a = 0.0
+        for k in range(4):
+            i = cidx[j, k]
+            if i >= 0:
+                a += cgn[j, k] * dy[n + i]
+        r += cc[j] * a
+    return r
 
 
 def contact_rates(j, dy, n, cidx, cgn, cgr, ck):
@@ -942,7 +1012,8 @@ def settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log
 
 
 def initial_modes(t, y, cm, I, R, WI, WF, G, counters, max_pivots, e, ei):
-    """Close every contact with penetration ``>= 0`` through its law's entry rule; resolve friction.
+    """Close every contact whose normal guard is ``>= 0`` (penetration ``>= 0`` for a contact spring)
+    through its law's entry rule; resolve friction.
 
     ``G`` is guard scratch ``(nc, GMAX)``; ``e`` and ``ei`` are empty float and int
     arrays (no event log).

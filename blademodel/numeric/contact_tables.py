@@ -5,7 +5,8 @@ the inertia of each coordinate, the stiffness and damping entries of springs and
 dampers (``-dQ/dq``, ``-dQ/du`` of their loads, which must be linear), each
 force's load as a sum of harmonic terms ``A sin(w t + phi)`` and a constant
 (a constant is the frequency group ``w = 0``: ``sin 0 = 0``, ``cos 0 = 1``), and each contact's penetration and
-relative-slip gradients (its n/r projection) and gap. The entries are kept as
+relative-slip gradients (its n/r projection), gap and normal law (spring, damped
+or constant load, with ``k``, ``c``, ``N0``). The entries are kept as
 expressions of the parameter names (a JSON form cached on disk), so a run with a
 cached structure evaluates them with :mod:`math` and never imports SymPy, and a
 parameter change re-evaluates them in microseconds. The work grows linearly with
@@ -22,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model import Model
+from .contract import NK_DAMPED, NK_LOAD, NK_SPRING
 
 _NAMESPACE = {"sin": math.sin, "cos": math.cos, "tan": math.tan, "sqrt": math.sqrt, "exp": math.exp,
               "pi": math.pi, "E": math.e, "Abs": abs, "__builtins__": {}}
@@ -110,8 +112,12 @@ def derive_tables(model: Model) -> dict:
             gr.append(str(dr))
         if len(slots) > 4:
             raise ValueError(f"contact {ct.name} moves {len(slots)} coordinates; at most 4 (two 2-D bodies)")
+        pars = ct.parameters()
         contacts.append({"slots": slots, "gn": gn, "gr": gr, "gap": str(-delta.xreplace({q[c]: 0 for c in involved(delta, q)})),
-                         "k": str(ct.parameters()["k"].symbol),
+                         "k": str(pars["k"].symbol) if "k" in pars else "0",
+                         "normal": ct.normal_kind,
+                         "c": str(pars["damping"].symbol) if "damping" in pars else "0",
+                         "N0": str(pars["normal_load"].symbol) if "normal_load" in pars else "0",
                          "law": [str(p.symbol) for p in ct.friction.parameters().values()]})
     return {"coordinates": coords, "inertia": [inertia[c] for c in coords],
             "stiffness": linear(model.springs, q, "spring"), "damping": linear(model.dampers, u, "damper"),
@@ -202,6 +208,11 @@ class NumericTables:
         self.cgr = np.zeros((nc, 4))
         self.cgap = np.array([ev(c["gap"]) for c in cs], dtype=float)
         self.ck = np.array([ev(c["k"]) for c in cs], dtype=float)
+        # tables cached before contacts had normal laws hold springs only
+        kinds = {"spring": NK_SPRING, "damped": NK_DAMPED, "load": NK_LOAD}
+        self.cnk = np.array([kinds[c.get("normal", "spring")] for c in cs], dtype=np.int64)
+        self.cc = np.array([ev(c.get("c", "0")) for c in cs], dtype=float)
+        self.cn0 = np.array([ev(c.get("N0", "0")) for c in cs], dtype=float)
         pos = {name: i for i, name in enumerate(param_order)}
         width = max([len(c["law"]) for c in cs] + [1])
         self.LP = np.zeros((nc, width), dtype=np.int64)

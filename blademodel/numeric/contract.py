@@ -64,7 +64,11 @@ O_KP, O_KI, O_CP, O_CI, O_FI, O_FG, O_CIDX, O_CLAW, O_CSO, O_LP, O_WP, O_WI = ra
 R_INVM, R_KV, R_CV, R_FS, R_FC, R_OM, R_GN, R_GR, R_GAP, R_K, R_P, R_W, R_RK = range(19, 32)  #: offsets into R
 (F_F, F_N, F_ND, F_V, F_FR, F_DL, F_X, F_D, F_NULL, F_B, F_SG, F_CG, F_Z, F_YEV, F_L, F_DR,
  F_T, F_FD, F_XD) = range(32, 51)  #: offsets into WF
-H_SIZE = 51    #: header length
+#: Each contact's normal law (``I``): NK_SPRING ``N = k delta``, NK_DAMPED ``N = k delta + c ddelta/dt``
+#: (opens at ``N = 0``), NK_LOAD ``N = N0`` (never opens); and its values (``R``): ``c``, ``N0``.
+O_CNK, R_CC, R_N0 = 51, 52, 53
+NK_SPRING, NK_DAMPED, NK_LOAD = 0, 1, 2
+H_SIZE = 54    #: header length
 #: Rows of the kernel's stage buffer ``SC`` before the extra stages of a tableau method.
 SC_ROWS = 9
 #: Frequency groups and law states the work buffer holds.

@@ -87,6 +87,8 @@ class _Assembly:
     f_sym: list
     N_sym: list
     state_syms: list
+    #: ``d u_c / dt`` placeholders: a damped contact's ``Ndot`` needs the mode's accelerations
+    acc_syms: list
 
     @functools.cached_property
     def Minv(self) -> sp.Matrix:
@@ -113,25 +115,37 @@ def _assemble(model: Model) -> _Assembly:
     ctxs, geom = [], []
     f_sym = [sp.Symbol(f"f_{c.name}", real=True) for c in contacts]
     N_sym = [sp.Symbol(f"N_{c.name}", real=True) for c in contacts]
+    acc = {cc: sp.Symbol(f"_acc_{cc}", real=True) for cc in coords}
     for j, c in enumerate(contacts):
         delta = c.penetration(q)
         slip = c.relative_slip(q)
-        k = c.parameters()["k"].symbol
+        rate = _derivative(delta, q, u)
+        dn = {cc: sp.diff(delta, q[cc]) for cc in coords}
+        dr = {cc: sp.diff(slip, q[cc]) for cc in coords}
         ctx = ContactContext(
-            N=k * delta, Ndot=k * _derivative(delta, q, u), v=_derivative(slip, q, u), f=f_sym[j],
+            N=c.normal_force(delta, rate),
+            Ndot=c.normal_force_rate(rate, sum(dn[cc] * acc[cc] for cc in coords)),
+            v=_derivative(slip, q, u), f=f_sym[j],
             states={st: s[(c.name, st)] for st in c.friction.states},
             params={name: p.symbol for name, p in c.friction.parameters().items()})
         ctxs.append(ctx)
-        dn = {cc: sp.diff(delta, q[cc]) for cc in coords}
-        dr = {cc: sp.diff(slip, q[cc]) for cc in coords}
-        geom.append({"delta": delta, "dn": dn, "dr": dr,
+        geom.append({"delta": delta, "rate": rate, "dn": dn, "dr": dr,
+                     "close": c.closing_guard(delta, rate), "open": c.opening_guard(delta, rate),
                      # the coordinates the contact acts on (its loads are zero on the others)
                      "touched": [cc for cc in coords if dn[cc] != 0 or dr[cc] != 0],
                      "slides": [cc for cc in coords if dr[cc] != 0]})
 
     state_syms = [s[(c.name, st)] for c in contacts for st in c.friction.states]
     return _Assembly(model, t, q, u, s, coords, params, masses, M, F_smooth, contacts, ctxs, geom,
-                     f_sym, N_sym, state_syms)
+                     f_sym, N_sym, state_syms, [acc[cc] for cc in coords])
+
+
+def _with_accelerations(asm: _Assembly, expr, accelerations):
+    """``expr`` with the acceleration placeholders of a damped contact's ``Ndot`` replaced."""
+    expr = sp.sympify(expr)
+    if not any(a in expr.free_symbols for a in asm.acc_syms):
+        return expr
+    return expr.xreplace(dict(zip(asm.acc_syms, accelerations)))
 
 
 def _mode_name(contacts, combo) -> str:
@@ -240,7 +254,7 @@ def _flow(asm: _Assembly, combo, solve=_joint_solve) -> tuple[Mode, dict]:
         sub = {asm.f_sym[j]: fj[j]}
         r = c.friction.rates(lm, asm.ctxs[j]) if lm else c.friction.open_rates(asm.ctxs[j])
         for st in c.friction.states:
-            rates.append(sp.sympify(r.get(st, 0)).xreplace(sub))
+            rates.append(_with_accelerations(asm, sp.sympify(r.get(st, 0)).xreplace(sub), acc))
     name = _mode_name(asm.contacts, combo)
     return Mode(name, combo, acc, rates, Nj, fj, constrained), Fdisp
 
@@ -258,16 +272,17 @@ def _projection(asm: _Assembly, constrained) -> dict:
     return {u[c]: sp.expand(u[c] - du[i]) for i, c in enumerate(coords)}
 
 
-def _contact_guards(c, lm, ctx: ContactContext, delta) -> list[Guard]:
+def _contact_guards(c, lm, ctx: ContactContext, close, open_) -> list[Guard]:
     """One contact's guards in its mode ``lm`` (``None``: open), named without the contact.
 
-    Open: the contact closes when ``delta`` rises through zero (the law's entry
-    candidates). Closed: it opens when ``delta`` falls through zero, then the
-    law's own guards, in the law's order.
+    Open: the contact closes when ``close`` rises through zero (the law's entry
+    candidates). Closed: it opens when ``open_`` falls through zero, then the
+    law's own guards, in the law's order. Both are the penetration for a contact
+    spring (:meth:`~blademodel.components.contact.Contact.closing_guard`).
     """
     if lm is None:
-        return [Guard(delta, +1, list(c.friction.entry(ctx)), "close")]
-    out = [Guard(delta, -1, [Candidate("open", sp.true, c.friction.exit_reset(ctx))], "open")]
+        return [Guard(close, +1, list(c.friction.entry(ctx)), "close")]
+    out = [Guard(open_, -1, [Candidate("open", sp.true, c.friction.exit_reset(ctx))], "open")]
     for g in c.friction.guards(lm, ctx):
         if g.direction not in (-1, 0, 1):
             raise ValueError(f"guard {g.name!r}: direction must be -1, 0 or +1")
@@ -288,6 +303,9 @@ def _guards(asm: _Assembly, mode: Mode, resolve: _Resolver, project=_projection)
     contacts, ctxs = asm.contacts, asm.ctxs
     projections: dict = {}
 
+    def here(expr):
+        return _with_accelerations(asm, expr, mode.accelerations)
+
     def subs_f(expr, force, j):
         return sp.sympify(expr).xreplace({asm.f_sym[j]: force})
 
@@ -303,21 +321,26 @@ def _guards(asm: _Assembly, mode: Mode, resolve: _Resolver, project=_projection)
             target, constrained, force_of = resolve(tuple(combo))
             reset = {}
             for st, expr in cand.reset.items():
-                reset[ctxs[j].states[st]] = subs_f(expr, mode.friction_forces[j], j)
+                reset[ctxs[j].states[st]] = here(subs_f(expr, mode.friction_forces[j], j))
             if set(constrained) - set(mode.constrained):
                 key = tuple(constrained)
                 if key not in projections:
                     projections[key] = project(asm, constrained)
                 reset.update(projections[key])
             cond = subs_f(cand.when, force_of(j), j)
+            if any(a in cond.free_symbols for a in asm.acc_syms):
+                raise NotImplementedError(
+                    f"contact {c.name}: the {type(c.friction).__name__} law's condition for mode {cand.mode!r} "
+                    f"uses dN/dt, which a damped contact knows only from the target mode's accelerations; "
+                    f"this combination is not supported")
             out.append(Transition(target, cond, reset))
         return out
 
     guards = []
     for j, c in enumerate(contacts):
         lm = _law_mode(mode.local, j)
-        for k, g in enumerate(_contact_guards(c, lm, ctxs[j], asm.geom[j]["delta"])):
-            expr = subs_f(g.expr, mode.friction_forces[j], j)  # (the penetration has no f: unchanged)
+        for k, g in enumerate(_contact_guards(c, lm, ctxs[j], asm.geom[j]["close"], asm.geom[j]["open"])):
+            expr = here(subs_f(g.expr, mode.friction_forces[j], j))  # (the contact's own guard: unchanged)
             kind = "law" if k else ("close" if lm is None else "open")
             guards.append(GuardSpec(expr, g.direction, f"{c.name}: {g.name}", j,
                                     transitions(j, list(g.candidates)), kind))
@@ -333,22 +356,24 @@ def _energy(asm: _Assembly, modes: list[Mode]) -> dict:
                       sp.Integer(0))
     viscous = sum((d.dissipation_rate(u) for d in model.dampers), sp.Integer(0))
     energy = {"kinetic": kinetic, "potential": potential, "input_power": input_power,
-              "viscous_power": viscous, "contact": [], "law": [], "friction_power": []}
+              "viscous_power": viscous, "contact": [], "law": [], "friction_power": [], "contact_power": []}
     for mode in modes:
-        contact_e, law_e, fric_p = sp.Integer(0), sp.Integer(0), sp.Integer(0)
+        contact_e, law_e, fric_p, contact_p = sp.Integer(0), sp.Integer(0), sp.Integer(0), sp.Integer(0)
         for j, c in enumerate(asm.contacts):
             E_law = c.friction.stored_energy(asm.ctxs[j])
             law_e += E_law
-            if _law_mode(mode.local, j) is None:
+            closed = _law_mode(mode.local, j) is not None
+            contact_e += c.stored_energy(asm.geom[j]["delta"], closed)
+            contact_p += c.dissipation_rate(asm.geom[j]["delta"], asm.geom[j]["rate"], closed)
+            if not closed:
                 continue
-            k = c.parameters()["k"].symbol
-            contact_e += k * asm.geom[j]["delta"] ** 2 / 2
             dE = sum(sp.diff(E_law, st) * mode.state_rates[asm.state_syms.index(st)]
                      for st in asm.ctxs[j].states.values())
             fric_p += mode.friction_forces[j] * asm.ctxs[j].v - dE
         energy["contact"].append(contact_e)
         energy["law"].append(law_e)
         energy["friction_power"].append(fric_p)
+        energy["contact_power"].append(contact_p)
     return energy
 
 
@@ -727,7 +752,9 @@ def contact_equations(model: Model, name: str) -> ContactEquations:
     q, u, s = _state_symbols(model)
     delta = c.penetration(q)
     slip = c.relative_slip(q)
-    k = c.parameters()["k"].symbol
+    rate = _derivative(delta, q, u)
+    acc = sum(sp.diff(delta, x) * sp.Symbol(f"a{x.name}", real=True) for x in q.values())
+    k = c.parameters()["k"].symbol if "k" in c.parameters() else None
     N, Ndot, v, f = (sp.Symbol(f"{x}_{name}", real=True) for x in ("N", "Ndot", "v", "f"))
     states = {st: s[(name, st)] for st in c.friction.states}
     ctx = ContactContext(N=N, Ndot=Ndot, v=v, f=f, states=states,
@@ -740,12 +767,14 @@ def contact_equations(model: Model, name: str) -> ContactEquations:
             mode=mode, normal_force=sp.Integer(0) if lm is None else N,
             friction_force=sp.Integer(0) if lm is None else c.friction.force(lm, ctx),
             rates={states[st]: sp.sympify(r.get(st, 0)) for st in c.friction.states},
-            guards=_contact_guards(c, lm, ctx, delta)))
+            guards=_contact_guards(c, lm, ctx, c.closing_guard(delta, rate), c.opening_guard(delta, rate))))
     return ContactEquations(
         model=model, name=name, bodies=tuple(b.name for b in c.bodies), ground=c.body2 is None,
         law=type(c.friction).__name__, q=list(q.values()), u=list(u.values()),
         penetration=delta, slip=slip, k=k, N=N, Ndot=Ndot, v=v, f=f,
-        definitions={N: k * delta, v: _derivative(slip, q, u), Ndot: k * _derivative(delta, q, u)},
+        definitions={N: c.normal_force(delta, rate), v: _derivative(slip, q, u),
+                     Ndot: c.normal_force_rate(rate, acc)},
+        normal_kind=c.normal_kind, penetration_rate=rate,
         states=states,
         params=[p.symbol for p in (*c.parameters().values(), *c.friction.parameters().values())],
         modes=modes)

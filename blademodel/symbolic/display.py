@@ -40,6 +40,7 @@ def _time_functions(system: System, readable: bool = False) -> tuple[sp.Symbol, 
         f = dynamicsymbols(q.name)
         sub[q] = f
         sub[u] = f.diff(t)
+        sub[sp.Symbol(f"a{q.name}", real=True)] = f.diff(t, 2)   # in a damped contact's Ndot
     for s in system.s:
         sub[s] = dynamicsymbols(s.name)
     if readable:
@@ -258,6 +259,9 @@ def latex(system: System, mode: Optional[str] = None) -> str:
 # --- one contact's own equations -------------------------------------------------------------
 
 _DIRECTION = {-1: "falls through 0", 1: "rises through 0", 0: "crosses 0"}
+_NORMAL_NOTE = {"spring": "normal force while closed, 0 while open",
+                "damped": "normal force while closed (>= 0: it opens when N falls through 0), 0 while open",
+                "load": "constant normal load: closed from the start, never opens"}
 
 
 def _contact_sub(ce: ContactEquations, shown: list) -> dict:
@@ -271,6 +275,7 @@ def _contact_sub(ce: ContactEquations, shown: list) -> dict:
         f = dynamicsymbols(q.name)
         sub[q] = f
         sub[u] = f.diff(t)
+        sub[sp.Symbol(f"a{q.name}", real=True)] = f.diff(t, 2)   # in a damped contact's Ndot
     for s in ce.states.values():
         sub[s] = dynamicsymbols(s.name)
     return _readable(sub, [*ce.params, ce.k, ce.N, ce.Ndot, ce.v, ce.f, *shown])
@@ -297,19 +302,26 @@ def _contact_rows(ce: ContactEquations) -> list[tuple]:
     delta = sp.Symbol(f"delta_{ce.name}")
     r = sp.Symbol(f"r_{ce.name}")
     vdot = sp.Symbol(f"vdot_{ce.name}")
-    sub = _contact_sub(ce, [delta, r, vdot])
+    deltadot = sp.Symbol(f"deltadot_{ce.name}")
+    sub = _contact_sub(ce, [delta, r, vdot, deltadot])
+
+    # a damped contact's guards and N read in delta and its rate
+    named = {} if ce.normal_kind == "spring" else {ce.penetration: delta}
+    if ce.normal_kind == "damped":
+        named[ce.penetration_rate] = deltadot
 
     def X(expr):
         expr = sp.sympify(expr)
-        return sub.get(delta, delta) if expr == ce.penetration else expr.xreplace(sub)
+        return sub.get(delta, delta) if expr == ce.penetration else expr.xreplace(named).xreplace(sub)
 
     N, f = X(ce.N), X(ce.f)
     rows = [("eq", sp.Eq(X(delta), ce.penetration.xreplace(sub), evaluate=False),
              "penetration: closed while positive"),
             ("eq", sp.Eq(X(r), X(ce.slip), evaluate=False), "relative slip"),
             ("eq", sp.Eq(X(ce.v), X(ce.definitions[ce.v]), evaluate=False), "relative slip velocity, dr/dt"),
-            ("eq", sp.Eq(N, sp.Mul(X(ce.k), X(delta), evaluate=False), evaluate=False),
-             "normal force while closed, 0 while open")]
+            ("eq", sp.Eq(N, sp.Mul(X(ce.k), X(delta), evaluate=False) if ce.normal_kind == "spring"
+                         else X(ce.definitions[ce.N]), evaluate=False),
+             _NORMAL_NOTE[ce.normal_kind])]
     if _uses_Ndot(ce):
         rows.append(("eq", sp.Eq(X(ce.Ndot), X(ce.definitions[ce.Ndot]), evaluate=False), "dN/dt while closed"))
     for m in ce.modes:

@@ -274,7 +274,7 @@ def scaled_equations(system: Model | HybridSystem, *, length: sp.Symbol | None =
     coords = list(model.coordinates)
 
     if length is None:
-        length = _unique_symbol({c.parameters()["gap"].symbol for c in model.contacts},
+        length = _unique_symbol({c.parameters()["gap"].symbol for c in model.contacts if "gap" in c.parameters()},
                                 "length scale (one contact gap)", "length=")
     if frequency is None:
         frequency = _unique_symbol({f.frequency.symbol for f in model.forces if f.frequency is not None},

@@ -255,18 +255,24 @@ class ContactEquations:
         The model's coordinates and velocities.
     penetration, slip : sympy.Expr
         ``delta = n1 - n2 - gap`` and ``r1 - r2``.
-    k : sympy.Symbol
-        Normal contact stiffness: ``N_c = k delta`` while closed.
+    k : sympy.Symbol or None
+        Normal contact stiffness (``None`` for a constant normal load).
     N, Ndot, v, f : sympy.Symbol
         ``N_c``, its rate, the relative slip velocity ``v_c`` and the friction force ``f_c``.
     definitions : dict
-        ``N_c``, ``v_c``, ``Ndot_c`` (symbol) -> expression of the state (``N_c`` while closed).
+        ``N_c``, ``v_c``, ``Ndot_c`` (symbol) -> expression of the state (``N_c`` while closed;
+        a damped contact's ``Ndot_c`` has the accelerations ``a<coordinate>``).
     states : dict of str to sympy.Symbol
         The law's states.
     params : list of sympy.Symbol
         Parameters of the contact and of its law.
     modes : list of ContactModeEquations
         ``open`` first, then the law's modes.
+    normal_kind : str
+        The normal law: ``"spring"``, ``"damped"`` or ``"load"``
+        (:attr:`~blademodel.components.contact.Contact.normal_kind`).
+    penetration_rate : sympy.Expr or None
+        ``ddelta/dt`` as an expression of the velocities.
     """
 
     model: object
@@ -287,3 +293,5 @@ class ContactEquations:
     states: dict
     params: list
     modes: list
+    normal_kind: str = "spring"
+    penetration_rate: sp.Expr = None

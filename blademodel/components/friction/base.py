@@ -64,9 +64,12 @@ class ContactContext:
     Attributes
     ----------
     N : sympy.Expr
-        Normal force of the closed contact, ``k * delta``.
+        Normal force of the closed contact: ``k * delta``, ``k * delta + c_n * ddelta/dt``
+        (normal damping) or a constant ``N0`` (:class:`~blademodel.components.contact.Contact`).
     Ndot : sympy.Expr
-        Its time derivative, a function of the state.
+        Its time derivative, a function of the state (with normal damping, also of
+        the accelerations, which the symbolic layer fills in per mode; a law's
+        friction force must then not use it).
     v : sympy.Expr
         Relative tangential velocity ``dr1/dt - dr2/dt``.
     f : sympy.Symbol
