@@ -278,7 +278,8 @@ def _contact_sub(ce: ContactEquations, shown: list) -> dict:
         sub[sp.Symbol(f"a{q.name}", real=True)] = f.diff(t, 2)   # in a damped contact's Ndot
     for s in ce.states.values():
         sub[s] = dynamicsymbols(s.name)
-    return _readable(sub, [*ce.params, ce.k, ce.N, ce.Ndot, ce.v, ce.f, *shown])
+    named = [*ce.params, ce.k, ce.N, ce.Ndot, ce.v, ce.f, *shown]
+    return _readable(sub, [s for s in named if s is not None])   # a constant-load contact has no k
 
 
 def _uses_Ndot(ce: ContactEquations) -> bool:
