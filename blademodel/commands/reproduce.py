@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from ..sweep import load_study, open_result
+from ..sweep.claims import check_claims, claims_table, tally
 from ..sweep.studies import paper_figures, summarize
 from .sweep import add_run_arguments, default_out, execute
 
@@ -41,8 +42,12 @@ def run(args: argparse.Namespace) -> int:
         seconds = time.perf_counter() - t0
         entry = {"title": study.title, "paper": study.paper, "seconds": round(seconds, 1),
                  "data": str(out), "figures": [str(f) for f in figures]}
-        if study.cases:
-            entry["cases"] = summarize(open_result(out))
+        if study.cases or study.claims:
+            ds = open_result(out)
+            if study.cases:
+                entry["cases"] = summarize(ds)
+            if study.claims:
+                entry["claims"] = check_claims(study, ds)
         summary[name] = entry
         print(f"{name}: {study.title} ({seconds:.0f} s)")
         for row in entry.get("cases", []):
@@ -53,6 +58,16 @@ def run(args: argparse.Namespace) -> int:
             print(f"    paper: {study.paper}")
     path = Path(args.out) / ("summary_quick.json" if args.quick else "summary.json")
     previous = json.loads(path.read_text()) if path.exists() else {}
-    path.write_text(json.dumps({**previous, **summary}, indent=2))
+    merged = {k: v for k, v in {**previous, **summary}.items() if k != "claims_tally"}
+    rows = [row for name in sorted(merged) for row in merged[name].get("claims", [])]
+    if rows:
+        agree, measured = tally(rows)
+        merged["claims_tally"] = {"agree": agree, "measured": measured, "claims": len(rows)}
+        print("\nThe paper's case points beside what was measured" + (" (--quick: coarse runs)" if args.quick else "")
+              + (f", with the figures of earlier runs in {path}" if set(merged) - set(summary) - {"claims_tally"}
+                 else "") + ":")
+        for line in claims_table(rows):
+            print("    " + line)
+    path.write_text(json.dumps(merged, indent=2))
     print(f"summary: {path}")
     return 1 if failed else 0

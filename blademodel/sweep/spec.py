@@ -61,6 +61,33 @@ class RunSettings(_Strict):
     history_periods: int = Field(0, ge=0, description="last periods kept as a time history (case figures)")
 
 
+class Claim(_Strict):
+    """What a source (a paper) reports at one point of a study, to be set beside what is measured there.
+
+    Attributes
+    ----------
+    at : dict of str to float
+        The point: a value of every swept field, or the fields of one of the
+        study's ``cases``. In a sweep the nearest grid point is measured.
+    motion : str
+        The reported motion: ``P1`` ... ``P16`` (period-n), ``chaos``,
+        ``quasi-periodic`` or ``nonperiodic``.
+    law : str, optional
+        The friction law of the point, in a study over several ``laws``.
+    """
+
+    at: dict[str, float] = Field(min_length=1)
+    motion: str
+    law: Optional[str] = None
+
+    @field_validator("motion")
+    @classmethod
+    def _known_motion(cls, v: str) -> str:
+        if not re.fullmatch(r"P([1-9]|1[0-6])|chaos|quasi-periodic|nonperiodic", v):
+            raise ValueError(f"motion {v!r}: expected P1 ... P16, chaos, quasi-periodic or nonperiodic")
+        return v
+
+
 class Study(_Strict):
     """One study: a paper figure or a user's own sweep.
 
@@ -83,6 +110,9 @@ class Study(_Strict):
         (``{iwan: {elements: 8}}``); a law not listed runs with its defaults.
     cases : list of dict
         Single points to show as four-panel case figures instead of a sweep.
+    claims : list of Claim
+        What the paper reports at some of the study's points; ``reproduce``
+        sets each beside the measured motion (:mod:`blademodel.sweep.claims`).
     plot : str
         ``bifurcation``, ``reduction``, ``map`` or ``cases``.
     quick : dict
@@ -97,6 +127,7 @@ class Study(_Strict):
     laws: Optional[list[str]] = None
     law_options: Optional[dict[str, dict[str, Any]]] = None
     cases: list[dict] = Field(default_factory=list)
+    claims: list[Claim] = Field(default_factory=list)
     run: RunSettings = Field(default_factory=RunSettings)
     plot: Literal["bifurcation", "reduction", "map", "cases"] = "bifurcation"
     quick: dict = Field(default_factory=lambda: {"num": 8, "transient": 40, "periods": 16})
@@ -133,6 +164,13 @@ class Study(_Strict):
             raise ValueError("a study needs a sweep or cases")
         if len(self.sweep) > 2:
             raise ValueError(f"sweep over at most two fields, got {list(self.sweep)}")
+        fields = set(self.sweep) | {f for c in self.cases for f in c}
+        for i, claim in enumerate(self.claims):
+            if set(claim.at) - fields:
+                raise ValueError(f"claims[{i}].at names {sorted(set(claim.at) - fields)}, which the study neither "
+                                 f"sweeps nor sets in its cases ({sorted(fields)})")
+            if claim.law is not None and claim.law not in (self.laws or [self.base.get("friction", claim.law)]):
+                raise ValueError(f"claims[{i}].law = {claim.law!r} is not a law of the study")
         return self
 
     def quick_version(self) -> "Study":
