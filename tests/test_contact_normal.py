@@ -253,15 +253,15 @@ def test_tangent_monodromy_equals_differences(case):
 
 
 def test_normal_load_replaces_the_preloaded_ground_contact(tmp_path):
-    """``models/friction_oscillator.yaml`` presses its mass with a preload (N = -kc Delta = 20 N);
-    ``normal_load: 20`` is the same oscillator, to rounding."""
+    """``models/friction_oscillator.yaml`` presses its mass with ``normal_load: N`` (20 N); the old way, a
+    ground contact with a preload (a negative gap, N = -kc Delta = 20 N), is the same oscillator, to rounding."""
     source = (Path(__file__).resolve().parents[1] / "models" / "friction_oscillator.yaml").read_text()
-    old = "    gap: Delta      # a preload: N = -kc * Delta = 20 N, constant\n    k: kc\n"
+    old = "    normal_load: N  # constant: no gap, no contact stiffness\n"
     assert old in source
-    path = tmp_path / "loaded.yaml"
-    path.write_text(source.replace(old, "    normal_load: 20.0\n"))
-    preload = load_model(str(Path(__file__).resolve().parents[1] / "models" / "friction_oscillator.yaml"))
-    loaded = load_model(str(path))
+    path = tmp_path / "preloaded.yaml"
+    path.write_text(source.replace(old, "    gap: -2e-5\n    k: 1e6\n"))
+    loaded = load_model(str(Path(__file__).resolve().parents[1] / "models" / "friction_oscillator.yaml"))
+    preload = load_model(str(path))
     assert loaded.contacts[0].normal_kind == "load"
     a, b = (simulate(m, periods=8, steps_per_period=1000) for m in (preload, loaded))
     assert a.counters["events"] == b.counters["events"] > 8
