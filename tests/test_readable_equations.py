@@ -65,7 +65,7 @@ _FUNCTIONS = {"sin", "cos", "tan", "tanh", "exp", "log", "sqrt", "Abs", "sign", 
               "the", "constraint", "force", "which", "holds", "it", "depends", "on", "other", "contacts", "modes",
               "see", "penetration", "closed", "while", "positive", "relative", "velocity", "dr", "dt", "normal",
               "dN", "and", "contact", "bodies", "body", "ground", "friction", "law", "every", "others", "Jenkins",
-              "Coulomb", "NoFriction", "v", "t"}
+              "Coulomb", "NoFriction", "v", "t", "constant", "load", "from", "start", "never", "opens"}
 _TEX_COMMANDS = {"paragraph", "texttt", "begin", "end", "intertext", "text", "left", "right", "sin", "cos", "tan",
                  "tanh", "exp", "log", "sqrt", "frac", "dot", "ddot", "operatorname", "geq", "leq", "wedge", "vee",
                  "quad", "to", "cdot", "min", "max", "bar", "theta", "mu", "Delta", "delta", "alpha", "beta",
