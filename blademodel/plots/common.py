@@ -49,7 +49,7 @@ def fields_of(ds) -> list[str]:
     """The swept (or case) field names of a result dataset."""
     f = ds.attrs.get("fields")
     if f is None:
-        return [v[len("param_"):] for v in ds.data_vars if v.startswith("param_")]
+        return [v[len("param_"):] for v in ds.variables if v.startswith("param_")]
     return json.loads(f) if isinstance(f, str) else list(f)
 
 

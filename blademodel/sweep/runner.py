@@ -16,6 +16,7 @@ from .executors import choose
 from .lock import ResultLock
 from ..analysis import motion_class
 from ..progress import Progress
+from .cf import field_metadata
 from .point import build_config, motion_code, run_point
 from .spec import Study
 
@@ -47,6 +48,14 @@ def points(study: Study) -> tuple[list[str], list[list[float]], list[str], list[
             law_of.append(law)
             overrides.append(over)
     return fields, values, law_of, overrides
+
+
+def _state_names(model) -> list[str]:
+    """The names of the state vector, as the kernels name it: coordinates, ``v`` + coordinates, law states."""
+    coords = list(model.coordinates)
+    law_states = [st for c in model.contacts for st in c.friction.states]
+    names = [st if law_states.count(st) == 1 else f"{st}_{c.name}" for c in model.contacts for st in c.friction.states]
+    return [*coords, *(f"v{c}" for c in coords), *names]
 
 
 def _say(message: str) -> None:
@@ -134,12 +143,19 @@ def run_study(study: Study, out: str | Path, *, workers: int | None = None, sche
     fields, values, laws, overrides = points(study)
     run = study.run.model_dump()
     # Validate the base config once, here, so a bad study fails before any work.
-    n_state = 0
+    n_state, state_names, base_config = 0, [], None
     for law in sorted(set(laws)):
-        model = build_config(study.base, overrides[laws.index(law)]).build()
-        n_state = max(n_state, len(model.coordinates) * 2 + sum(len(c.friction.states) for c in model.contacts))
+        config = build_config(study.base, overrides[laws.index(law)])
+        model = config.build()
+        names = _state_names(model)
+        if len(names) > n_state:
+            n_state, state_names = len(names), names
+        if base_config is None:
+            base_config = build_config(study.base, {})
+    field_meta = {f: field_metadata(base_config, f) for f in fields}
     layout = dict(study_json=study_json, fields=fields, values=values, laws=laws, periods=run["periods"],
-                  n_state=n_state,
+                  n_state=n_state, state_names=state_names, field_meta=field_meta,
+                  config_json=base_config.model_dump_json(),
                   history=run["history_periods"] * run["steps_per_period"] + 1 if run["history_periods"] else 0)
     total = len(values)
     if progress == "stderr":
@@ -184,7 +200,36 @@ def open_result(path: str | Path):
     """The result file as an :class:`xarray.Dataset`, with the study in ``attrs``.
 
     The file is verified first (:func:`~blademodel.sweep.storage.check`), so a
-    damaged file never passes its zeros off as data.
+    damaged file never passes its zeros off as data. The file itself follows the
+    CF conventions (:mod:`blademodel.sweep.cf`) and opens with plain
+    :func:`xarray.open_dataset` too; ``open_result`` adds the check, parses the
+    JSON attributes and re-derives the motion class with the current rule.
+
+    Parameters
+    ----------
+    path : path
+        A result file of ``blademodel sweep`` or ``blademodel reproduce``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimensions ``point`` (one per point of the study), ``sample``
+        (recorded periods), ``state`` (coordinates, velocities, law states) and
+        ``time`` (kept history). Coordinates: ``point``, ``sample``, ``state``
+        (names), the swept fields ``param_<field>`` and ``law`` along ``point``.
+        Per point: ``done``, ``error`` (``""`` when it succeeded), ``period``,
+        ``motion`` (``n > 0`` period-n, 0 nonperiodic, -1 quasi-periodic, -2
+        chaos), ``lyapunov``, ``P``, ``P0``, ``Pd``, ``events``,
+        ``max_cone_ratio``, ``length_scale``; per point and sample
+        ``poincare_x1``, ``poincare_vx1``; per point and state ``final_state``,
+        ``harmonic1``. ``attrs``: ``study`` and ``config`` (dicts), ``fields``
+        (list), ``Conventions``, ``title``, ``history``.
+
+    Examples
+    --------
+    >>> ds = open_result("out/fig17/fig17.nc")                     # doctest: +SKIP
+    >>> coulomb = ds.where(ds.law == "coulomb", drop=True)         # doctest: +SKIP
+    >>> coulomb.Pd.plot(x="param_gamma")                           # doctest: +SKIP
 
     Raises
     ------
@@ -202,6 +247,8 @@ def open_result(path: str | Path):
             ds[name] = ds[name].astype(str)
     ds.attrs["study"] = json.loads(ds.attrs["study"])
     ds.attrs["fields"] = json.loads(ds.attrs["fields"])
+    if "config" in ds.attrs:   # files written before it existed have none
+        ds.attrs["config"] = json.loads(ds.attrs["config"])
     # The class is derived from the stored raw data (period, exponent) with the
     # current rule, so an older file never shows a stale classification.
     motion = ds["motion"].values.astype(float)

@@ -32,6 +32,7 @@ import netCDF4
 import numpy as np
 
 from .. import __version__
+from .cf import annotate
 from .errors import ResultFileError
 
 #: Per-point scalars. ``max_cone_ratio``: the largest ``|f| / (mu N)`` of a sticking
@@ -72,8 +73,14 @@ def _fsync(path: Path) -> None:
 
 
 def create(path: Path, *, study_json: str, fields: list[str], values: list[list], laws: list[str],
-           periods: int, n_state: int, history: int) -> None:
-    """Lay out a new result file for ``len(values)`` points (written aside, then renamed into place)."""
+           periods: int, n_state: int, history: int, state_names: list[str] | None = None,
+           field_meta: dict | None = None, config_json: str | None = None) -> None:
+    """Lay out a new result file for ``len(values)`` points (written aside, then renamed into place).
+
+    ``state_names`` name the ``state`` coordinate, ``field_meta`` gives each swept
+    field's ``(long_name, units)`` and ``config_json`` is the full validated base
+    config (attribute ``config``); see :mod:`blademodel.sweep.cf`.
+    """
     path = Path(path)
     tmp = path.with_name(path.name + ".new")
     with netCDF4.Dataset(tmp, "w", format=FORMAT) as ds:
@@ -90,6 +97,15 @@ def create(path: Path, *, study_json: str, fields: list[str], values: list[list]
         ds.setncattr("signature", study_signature(study_json))
         ds.setncattr("fields", json.dumps(fields))
         ds.setncattr("blademodel_version", __version__)
+        ds.createVariable("point", "i4", ("point",))[:] = np.arange(n)
+        ds.createVariable("sample", "i4", ("sample",))[:] = np.arange(periods)
+        names = list(state_names or [])[:n_state]
+        names += [f"state{k}" for k in range(len(names), n_state)]
+        ds.createDimension("name_chars", max([len(x.encode()) for x in names] + [1]))
+        sv = ds.createVariable("state", "S1", ("state", "name_chars"))
+        sv.set_auto_chartostring(False)
+        for k, name in enumerate(names):
+            sv[k, :] = _chars(name, len(ds.dimensions["name_chars"]))
         for j, f in enumerate(fields):
             v = ds.createVariable(f"param_{f}", "f8", ("point",))
             v[:] = [row[j] for row in values]
@@ -109,8 +125,7 @@ def create(path: Path, *, study_json: str, fields: list[str], values: list[list]
         for name in ("poincare_x1", "poincare_vx1"):
             ds.createVariable(name, "f8", ("point", "sample"), fill_value=np.nan)
         ds.createVariable("final_state", "f8", ("point", "state"), fill_value=np.nan)
-        h1 = ds.createVariable("harmonic1", "f8", ("point", "state"), fill_value=np.nan)
-        h1.long_name = "first-harmonic amplitude of each coordinate and velocity over the recorded periods"
+        ds.createVariable("harmonic1", "f8", ("point", "state"), fill_value=np.nan)
         if history:
             for name in ("history_t", "history_x1", "history_vx1"):
                 ds.createVariable(name, "f8", ("point", "time"), fill_value=np.nan)
@@ -118,6 +133,9 @@ def create(path: Path, *, study_json: str, fields: list[str], values: list[list]
         ev.set_auto_chartostring(False)
         ev[:] = np.zeros((n, ERROR_CHARS), dtype="S1")
         ds.createVariable("tail", "i4", ()).assignValue(TAIL_MAGIC)   # last: at the end of the file
+        ds["tail"].long_name = "end marker: reads 0 in a file cut short"
+        annotate(ds, fields=fields, field_meta=field_meta or {}, title=json.loads(study_json).get("title", ""),
+                 config_json=config_json)
     _fsync(tmp)
     tmp.replace(path)
 

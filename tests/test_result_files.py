@@ -1,0 +1,74 @@
+"""Result files any NetCDF tool can read: CF coordinates and attributes, strings, the config round trip."""
+
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from blademodel.config import config_from_data
+from blademodel.sweep import Study, open_result, run_study
+from blademodel.sweep.cf import VARIABLES, field_metadata
+from blademodel.sweep.point import build_config
+
+STUDY = {"name": "two_laws", "title": "P_d against gamma", "base": {"model": "blade_pair", "omega": 300.0},
+         "laws": ["coulomb", "bilinear"], "sweep": {"gamma": {"values": [2.0, 6.0]}},
+         "run": {"transient": 10, "periods": 6, "steps_per_period": 200, "vibration_reduction": True}}
+
+
+@pytest.fixture(scope="module")
+def result(tmp_path_factory):
+    path = tmp_path_factory.mktemp("cf") / "two_laws.nc"
+    run_study(Study.model_validate(STUDY), path, workers=1, progress=None, log=None)
+    return path
+
+
+def test_plain_xarray_sees_named_coordinates_and_strings(result):
+    ds = xr.open_dataset(result)
+    for dim in ds.dims:   # every dimension has its coordinate variable, except the law's characters
+        assert dim in ds.coords, dim
+    assert set(ds.coords) >= {"point", "sample", "state", "param_gamma", "law"}
+    assert list(ds["point"].values) == [0, 1, 2, 3]
+    assert list(ds["law"].values) == ["coulomb", "coulomb", "bilinear", "bilinear"]
+    assert all(isinstance(x, str) for x in ds["law"].values)
+    assert list(ds["state"].values[:8]) == ["x1", "y1", "x2", "y2", "vx1", "vy1", "vx2", "vy2"]
+    assert ds["state"].values[8] == "z"   # the Jenkins slider of the bilinear law: the longer state
+    assert ds["error"].values.tolist() == ["", "", "", ""]
+    # selection by the coordinates works without blademodel
+    bilinear = ds.where(ds.law == "bilinear", drop=True)
+    assert np.allclose(bilinear["param_gamma"].values, [2.0, 6.0])
+    assert np.isfinite(ds["Pd"].values).all()
+
+
+def test_cf_attributes(result):
+    ds = xr.open_dataset(result)
+    assert ds.attrs["Conventions"] == "CF-1.8" and ds.attrs["title"] == "P_d against gamma"
+    assert ds.attrs["source"].startswith("blademodel ") and ds.attrs["history"].startswith("created by blademodel")
+    for name, var in ds.variables.items():
+        assert var.attrs.get("long_name"), f"{name} has no long_name"
+        if name in VARIABLES and VARIABLES[name][1]:
+            assert var.attrs["units"] == VARIABLES[name][1], name
+    assert ds["Pd"].attrs["units"] == "percent" and ds["poincare_vx1"].attrs["units"] == "m s-1"
+    assert ds["param_gamma"].attrs["long_name"].startswith("contact stiffness ratio")
+    assert "units" not in ds["param_gamma"].attrs   # dimensionless
+    assert ds["lyapunov"].encoding.get("coordinates", "").split() == ["param_gamma", "law"]
+
+
+def test_field_units_come_from_the_config_descriptions():
+    cfg = build_config({"model": "blade_pair"}, {})
+    assert field_metadata(cfg, "omega") == ("excitation frequency (omega)", "rad s-1")
+    assert field_metadata(cfg, "gap") == ("initial shroud gap Delta (gap)", "m")
+    assert field_metadata(cfg, "cx") == ("tangential damping (cx)", "N s m-1")
+    assert field_metadata(cfg, "mu") == ("friction coefficient (mu)", None)
+    assert field_metadata(cfg, "no.such") == ("swept field no.such", None)
+
+
+def test_the_study_and_the_config_round_trip(result):
+    ds = xr.open_dataset(result)
+    study = Study.model_validate(json.loads(ds.attrs["study"]))
+    assert study == Study.model_validate(STUDY)
+    config = config_from_data(json.loads(ds.attrs["config"]), source="file")
+    assert config == build_config(STUDY["base"], {})
+    assert config.omega == 300.0 and config.gamma == 4.0   # the base's value and a default, both stored
+    opened = open_result(result)
+    assert opened.attrs["config"] == json.loads(ds.attrs["config"])
