@@ -72,3 +72,49 @@ def test_the_study_and_the_config_round_trip(result):
     assert config.omega == 300.0 and config.gamma == 4.0   # the base's value and a default, both stored
     opened = open_result(result)
     assert opened.attrs["config"] == json.loads(ds.attrs["config"])
+
+
+def test_a_branch_file_is_cf_and_plot_draws_it(tmp_path, capsys):
+    """``continue --out`` writes a CF file with named coordinates; ``blademodel plot`` draws its forced response."""
+    from matplotlib.image import imread
+
+    from blademodel.cli import main
+    from blademodel.orbits.branch_file import load_branch
+
+    model = tmp_path / "oscillator.yaml"
+    model.write_text("""model: components
+name: oscillator
+parameters: {omega: 9.0}
+masses: [{name: m, m: 1.0, dofs: [x]}]
+springs: [{a: x_m, k: 100.0}]
+dampers: [{a: x_m, c: 0.5}]
+forces: [{mass: m, amplitude: 1.0, omega: omega}]
+""")
+    branch_nc = tmp_path / "branch.nc"
+    assert main(["continue", str(model), "--param", "omega", "--from", "9", "--to", "11", "--out", str(branch_nc),
+                 "--max-points", "12", "--steps-per-period", "200"]) == 0
+    ds = xr.open_dataset(branch_nc)
+    assert ds.attrs["Conventions"] == "CF-1.8"
+    for dim in ds.dims:
+        assert dim in ds.coords, dim
+    assert "omega" in ds.coords and ds["amplitude"].encoding["coordinates"] == "omega"
+    assert all(var.attrs.get("long_name") for var in ds.variables.values())
+    capsys.readouterr()
+    assert main(["plot", str(branch_nc)]) == 0
+    png = tmp_path / "branch_branch.png"
+    assert capsys.readouterr().out.split() == [str(png)]
+    image = imread(png)
+    assert image.shape[0] > 100 and image[..., :3].std() > 0.01   # drawn, not blank
+    branch = load_branch(branch_nc)
+    # the exact linear FRF at the branch's ends: |X| = F0 / sqrt((k - m w^2)^2 + (c w)^2)
+    w = branch.params
+    exact = 1.0 / np.sqrt((100.0 - w ** 2) ** 2 + (0.5 * w) ** 2)
+    np.testing.assert_allclose(np.abs(branch.harmonics[:, 0]), exact, rtol=1e-6)
+
+
+def test_plot_refuses_a_file_that_is_no_result(tmp_path):
+    from blademodel.cli import main
+
+    other = tmp_path / "other.nc"
+    xr.Dataset({"a": ("x", [1.0, 2.0])}).to_netcdf(other)
+    assert main(["plot", str(other)]) != 0

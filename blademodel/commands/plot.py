@@ -1,17 +1,19 @@
-"""``blademodel plot RESULT.nc [--out DIR]``: write the figures of a sweep result as PNG files."""
+"""``blademodel plot RESULT.nc [--out DIR]``: write the figures of a result (a sweep or a branch) as PNG files."""
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 
 def register(subparsers) -> argparse.ArgumentParser:
     """Add the ``plot`` subcommand."""
-    p = subparsers.add_parser("plot", help="write the figures of a sweep result (PNG)",
+    p = subparsers.add_parser("plot", help="write the figures of a result: a sweep or a continued branch (PNG)",
                               description="Draw the figures a result's study asks for (bifurcation "
-                                          "diagram and P_d curves, periodicity map or case panels) and "
-                                          "print the paths of the PNG files.")
-    p.add_argument("result", metavar="RESULT.nc", help="result file of a study run")
+                                          "diagram and P_d curves, periodicity map or case panels), or the "
+                                          "forced response of a branch written by 'blademodel continue --out', "
+                                          "and print the paths of the PNG files.")
+    p.add_argument("result", metavar="RESULT.nc", help="result file of 'sweep', 'reproduce' or 'continue --out'")
     p.add_argument("--out", metavar="DIR", help="directory of the figures (default: next to the result)")
     p.set_defaults(run=run)
     return p
@@ -19,7 +21,26 @@ def register(subparsers) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """Write the figures and print their paths; return the exit code."""
+    from ..orbits.branch_file import is_branch_file
     from ..plots import plot_result
-    for path in plot_result(args.result, args.out):
+    paths = plot_branch(Path(args.result), args.out) if is_branch_file(args.result) else \
+        plot_result(args.result, args.out)
+    for path in paths:
         print(path)
     return 0
+
+
+def plot_branch(path: Path, out_dir=None) -> list[Path]:
+    """The forced response (first harmonic of the first coordinate) of a branch file: ``<stem>_branch.png``."""
+    import matplotlib.pyplot as plt
+
+    from ..orbits.branch_file import load_branch
+    from ..plots.branch import branch_figure
+    branch = load_branch(path)
+    folder = Path(out_dir) if out_dir else path.parent
+    folder.mkdir(parents=True, exist_ok=True)
+    fig = branch_figure(branch, branch.state_names[0])
+    out = folder / f"{path.stem}_branch.png"
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return [out]

@@ -9,7 +9,11 @@ import netCDF4
 import numpy as np
 
 from .. import __version__
+from ..sweep.cf import CONVENTIONS, field_metadata
 from .arclength import Branch, SpecialPoint
+
+#: Global attribute ``blademodel_kind`` of a branch file.
+KIND = "branch"
 
 
 def save_branch(branch: Branch, path, config=None) -> None:
@@ -20,14 +24,21 @@ def save_branch(branch: Branch, path, config=None) -> None:
     Poincare samples per ``point``, ``section`` (``t = k T``) and ``state``
     (DOF names as a string coordinate), the multipliers (real and imaginary parts)
     per ``point`` and ``multiplier``, ``stable``, and the special points (kind,
-    value, multiplier) along ``special``. Units and long names are attributes; the
-    config (if given) is stored as JSON in the global attribute ``config``.
+    value, multiplier) along ``special``. The file follows CF-1.8: every dimension has
+    its coordinate variable, every variable a ``long_name`` (the field its ``units``,
+    from the config's description), the field is an auxiliary coordinate of every
+    per-point variable; the config (if given) is stored as JSON in the global
+    attribute ``config``.
     """
     path = Path(path)
     tmp = path.with_name(path.name + ".tmp")
     k, n = branch.states.shape
     with netCDF4.Dataset(tmp, "w") as ds:
+        ds.Conventions = CONVENTIONS
         ds.title = f"periodic orbits continued in {branch.field}"
+        ds.source = f"blademodel {__version__}"
+        ds.history = f"created by blademodel {__version__} (blademodel continue)"
+        ds.blademodel_kind = KIND
         ds.blademodel_version = __version__
         ds.field = branch.field
         ds.periods = branch.periods
@@ -39,14 +50,23 @@ def save_branch(branch: Branch, path, config=None) -> None:
         ds.createDimension("multiplier", n)
         ds.createDimension("special", len(branch.special))
         ds.createDimension("section", branch.periods)
-        v = ds.createVariable("point", "i8", ("point",))
-        v[:] = np.arange(k)
+        for dim, long in (("point", "index of the orbit along the branch"),
+                          ("section", "index k of the Poincare sample at t = k T"),
+                          ("multiplier", "index of the Floquet multiplier, largest modulus first"),
+                          ("special", "index of the special point")):
+            v = ds.createVariable(dim, "i8", (dim,))
+            v[:] = np.arange(len(ds.dimensions[dim]))
+            v.long_name = long
         v = ds.createVariable("state", str, ("state",))
         for i, s in enumerate(branch.state_names):
             v[i] = s
+        v.long_name = "name of the state: coordinates, their velocities (v...), then friction-law states"
         v = ds.createVariable(branch.field, "f8", ("point",))
         v[:] = branch.params
-        v.long_name = f"continued field {branch.field}"
+        long_name, units = field_metadata(config, branch.field) if config is not None else (None, None)
+        v.long_name = long_name or f"continued field {branch.field}"
+        if units:
+            v.units = units
         for name, data, long in (("section_state", branch.states, "state at t = 0 (SI units)"),
                                  ("amplitude", branch.amplitudes, "half the peak-to-peak excursion over the orbit"),
                                  ("harmonic1_abs", np.abs(branch.harmonics), "first-harmonic amplitude"),
@@ -76,7 +96,27 @@ def save_branch(branch: Branch, path, config=None) -> None:
                            ("special_index", [p.index for p in branch.special])):
             v = ds.createVariable(name, "f8" if "index" not in name else "i8", ("special",))
             v[:] = np.asarray(data)
+        ds["special_kind"].long_name = "kind of special point: fold, period-doubling, neimark-sacker, grazing"
+        ds["special_" + branch.field].long_name = f"{branch.field} at the special point"
+        ds["special_multiplier_re"].long_name = "real part of the critical multiplier"
+        ds["special_multiplier_im"].long_name = "imaginary part of the critical multiplier"
+        ds["special_index"].long_name = "point of the branch after which the special point lies"
+        ds["multiplier_im"].long_name = "Floquet multipliers, largest modulus first (imaginary parts)"
+        ds["multiplier_re"].long_name = "Floquet multipliers, largest modulus first (real parts)"
+        for name, var in ds.variables.items():
+            if var.dimensions[:1] == ("point",) and name != "point":
+                var.coordinates = branch.field
     tmp.replace(path)
+
+
+def is_branch_file(path) -> bool:
+    """Whether ``path`` is a NetCDF file written by :func:`save_branch`."""
+    try:
+        with netCDF4.Dataset(path) as ds:
+            return getattr(ds, "blademodel_kind", None) == KIND or (
+                "section_state" in ds.variables and "field" in ds.ncattrs())
+    except (OSError, RuntimeError):
+        return False
 
 
 def load_branch(path) -> Branch:
