@@ -70,7 +70,8 @@ def test_the_study_and_the_config_round_trip(result):
     config = config_from_data(json.loads(ds.attrs["config"]), source="file")
     assert config == build_config(STUDY["base"], {})
     assert config.omega == 300.0 and config.gamma == 4.0   # the base's value and a default, both stored
-    opened = open_result(result)
+    import blademodel
+    opened = blademodel.open_result(result)
     assert opened.attrs["config"] == json.loads(ds.attrs["config"])
 
 
