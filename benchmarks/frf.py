@@ -36,7 +36,8 @@ import numpy as np
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parent))
 import _common as C  # noqa: E402
 
-from blademodel.config import BladePair, apply_overrides  # noqa: E402
+from blademodel.config import apply_overrides  # noqa: E402
+from blademodel.zheng2022 import BladePair
 from blademodel.numeric.kernels import make_integrator  # noqa: E402
 from blademodel.orbits import continuation  # noqa: E402
 

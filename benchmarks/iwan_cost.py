@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from blademodel.config import BladePair
+from blademodel.zheng2022 import BladePair
 from blademodel.numeric import HybridIntegrator
 from blademodel.numeric.contract import N_COUNTERS
 

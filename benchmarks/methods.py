@@ -24,7 +24,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _common as C  # noqa: E402
 
-from blademodel.config import BladePair  # noqa: E402
+from blademodel.zheng2022 import BladePair  # noqa: E402
 from blademodel.numeric import make_integrator  # noqa: E402
 from blademodel.numeric.contract import C_EVENTS, C_RHS, N_COUNTERS  # noqa: E402
 

@@ -46,7 +46,7 @@ import numpy as np
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parent))
 import _common as C  # noqa: E402
 
-from blademodel.config import BladePair  # noqa: E402
+from blademodel.zheng2022 import BladePair  # noqa: E402
 from blademodel.numeric import HybridIntegrator, simulate  # noqa: E402
 from blademodel.numeric.reference import simulate_reference  # noqa: E402
 from blademodel.numeric.contract import N_COUNTERS  # noqa: E402
@@ -85,7 +85,7 @@ def generic_runner(mod, integ, y0, mode0, start, end):
 
 PY_CODE = """
 import json, time, numpy as np
-from blademodel.config import BladePair
+from blademodel.zheng2022 import BladePair
 from blademodel.numeric import HybridIntegrator
 cfg = BladePair(**{cfg})
 integ = HybridIntegrator(cfg.build(), steps_per_period={S}, event_tol={TOL})

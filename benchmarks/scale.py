@@ -96,7 +96,7 @@ from blademodel.numeric import make_integrator
 t1 = time.perf_counter(); c1 = time.process_time()
 args = json.loads(sys.argv[1])
 if args["model"] == "pair":
-    from blademodel.config import BladePair
+    from blademodel.zheng2022 import BladePair
     model = BladePair(friction=args["law"]).build()
 else:
     from blademodel.config import BladedDisk
@@ -193,7 +193,8 @@ def cold_part(ns, laws) -> list[dict]:
 
 def warm_part(ns, laws, repeats: int) -> tuple[list[dict], dict]:
     """Per-step thread CPU time with the cache warm, all cases interleaved."""
-    from blademodel.config import BladedDisk, BladePair
+    from blademodel.config import BladedDisk
+    from blademodel.zheng2022 import BladePair
     from blademodel.numeric import make_integrator
     from blademodel.numeric.contract import C_LOCATION_SUBSTEPS, C_EVENTS, C_STEPS, N_COUNTERS
 

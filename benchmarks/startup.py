@@ -41,7 +41,7 @@ import time, sys, json
 w0 = time.time()
 t0 = time.perf_counter()
 import blademodel.config, blademodel.numeric
-from blademodel.config import BladePair
+from blademodel.zheng2022 import BladePair
 from blademodel.numeric import HybridIntegrator, simulate
 t1 = time.perf_counter()
 mods1 = {m for m in ("sympy", "scipy", "scipy.linalg", "scipy.integrate", "numba", "matplotlib", "xarray") if m in sys.modules}

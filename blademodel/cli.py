@@ -3,7 +3,8 @@
 Subcommands live in :mod:`blademodel.commands`, one module each, exposing
 ``register(subparsers)`` and ``run(args) -> int``. To add one, write the module
 and add its name to :data:`COMMANDS`; a listed module that does not exist yet is
-skipped.
+skipped. A plugin adds its own commands (modules of the same shape) under the
+entry point group ``blademodel.commands``, as the paper wing adds ``reproduce``.
 """
 
 from __future__ import annotations
@@ -11,12 +12,15 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+from importlib.metadata import entry_points
 from typing import Optional, Sequence
 
 from . import __version__
 
 #: Subcommand modules of :mod:`blademodel.commands`, in help order.
-COMMANDS = ["equations", "simulate", "orbit", "continue_", "sweep", "reproduce", "plot"]
+COMMANDS = ["equations", "simulate", "orbit", "continue_", "sweep", "plot"]
+#: Entry point group of plugin commands (each a module with ``register`` and ``run``).
+ENTRY_POINT_GROUP = "blademodel.commands"
 
 #: Exit code of a usage or config error (as argparse uses).
 EXIT_USAGE = 2
@@ -33,7 +37,7 @@ def _load_commands() -> list:
         except ModuleNotFoundError as e:
             if e.name != full:
                 raise  # the command exists but one of its imports is missing
-    return modules
+    return modules + [ep.load() for ep in entry_points(group=ENTRY_POINT_GROUP)]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -7,7 +7,7 @@ import pytest
 
 from blademodel.analysis import (CHAOS_THRESHOLD, amplitude_spectrum, classify_motion, largest_lyapunov,
                                  mean_square, poincare_period, vibration_reduction)
-from blademodel.config import BladePair
+from blademodel.zheng2022 import BladePair
 from blademodel.numeric import HybridIntegrator
 from blademodel.sweep.point import run_point
 

@@ -18,7 +18,8 @@ from sympy.physics.mechanics import (
 
 from blademodel import Model
 from blademodel.components import Damper, HarmonicForce, Mass, Param, Spring
-from blademodel.config import BladePair, BladeValues
+from blademodel.config import BladeValues
+from blademodel.zheng2022 import BladePair
 from blademodel.symbolic import derive
 
 

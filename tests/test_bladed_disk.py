@@ -7,7 +7,8 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.linalg import null_space
 
-from blademodel.config import BladedDisk, BladePair
+from blademodel.config import BladedDisk
+from blademodel.zheng2022 import BladePair
 from blademodel.numeric import ContactIntegrator, simulate
 from blademodel.numeric.energy import energy_balance
 

@@ -14,7 +14,7 @@ from pydantic import ValidationError
 
 from blademodel.components import Coulomb, Iwan, Jenkins
 from blademodel.config import BladedDisk, ConfigError, apply_overrides, load_config, load_model
-from blademodel.config.loading import FORMATS
+from blademodel.config.kinds import model_kinds
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 
@@ -218,7 +218,7 @@ def test_yaml_syntax_error_gives_file_and_line(tmp_path):
 
 # --- files and overrides --------------------------------------------------------------------
 def test_registered_format():
-    assert FORMATS["bladed_disk"] is BladedDisk
+    assert model_kinds()["bladed_disk"] is BladedDisk
 
 
 def test_example_file_loads():

@@ -25,7 +25,7 @@ from blademodel.components.friction import (
     FrictionLaw,
     Guard,
 )
-from blademodel.config import BladePair
+from blademodel.zheng2022 import BladePair
 
 
 def S(name):

@@ -12,8 +12,8 @@ import sympy as sp
 import yaml
 
 from blademodel.components import Coulomb, Jenkins
-from blademodel.config import (BladePair, ComponentsModel, ConfigError, apply_overrides, load_config,
-                               load_model)
+from blademodel.config import ComponentsModel, ConfigError, apply_overrides, load_config, load_model
+from blademodel.zheng2022 import BladePair
 from blademodel.model import Model
 from blademodel.symbolic import derive
 
@@ -177,7 +177,8 @@ def test_duplicate_key_is_an_error(tmp_path):
 
 
 def test_model_key_is_required_and_checked(tmp_path):
-    assert "model: missing key: expected one of 'blade_pair', 'components'" in error(tmp_path, "m: 1\n")
+    msg = error(tmp_path, "m: 1\n")
+    assert "model: missing key: expected one of 'components', 'bladed_disk', 'blade_pair'" in msg
     msg = error(tmp_path, "m: 1\nmodel: blade_pairs\n")
     assert "m.yaml:2: model = 'blade_pairs': expected one of" in msg
 

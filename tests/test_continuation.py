@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from blademodel.analysis.periodicity import poincare_period
-from blademodel.config import BladePair
+from blademodel.zheng2022 import BladePair
 from blademodel.numeric import simulate
 from blademodel.numeric.kernels import make_integrator
 from blademodel.orbits import PeriodMap, continuation, find_periodic_orbit, period_doubled_branch

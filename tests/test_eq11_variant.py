@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from blademodel.config import BladePair
+from blademodel.zheng2022 import BladePair
 from blademodel.symbolic import derive
 
 

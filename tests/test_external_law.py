@@ -18,7 +18,8 @@ from numpy.testing import assert_allclose
 from blademodel.components import Contact, Coulomb, HarmonicForce, Iwan, Jenkins, Mass, Spring
 from blademodel.components.friction import Candidate, ContactContext, FrictionLaw, Guard, registry
 from blademodel.components.parameter import Number, as_param
-from blademodel.config import BladePair, ConfigError, load_config, load_model
+from blademodel.config import ConfigError, load_config, load_model
+from blademodel.zheng2022 import BladePair
 from blademodel.model import Model
 from blademodel.numeric import simulate
 from blademodel.sweep.runner import points

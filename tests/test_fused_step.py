@@ -5,7 +5,7 @@ import types
 import numpy as np
 import pytest
 
-from blademodel.config import BladePair
+from blademodel.zheng2022 import BladePair
 from blademodel.numeric import HybridIntegrator, compile_model, loop
 
 

@@ -75,7 +75,7 @@ def test_the_pairs_brief_contacts_are_the_ones_a_finer_step_resolves():
     The product kernel (no grazing detection) misses them; the per-contact kernel finds them at the same
     step, and then sees the same events as the product kernel at S = 4000, where every contact spans
     steps (and the per-contact kernel there finds no grazing left)."""
-    from blademodel.config import BladePair
+    from blademodel.zheng2022 import BladePair
     m = BladePair(friction="bilinear", gamma=8.0, F0=80.0).build()
     run = dict(transient=60, periods=20)
     coarse_product = simulate(m, kernel="product", **run)
@@ -98,7 +98,7 @@ def test_a_slip_phase_shorter_than_a_step_is_detected():
     """
     from collections import Counter
 
-    from blademodel.config import BladePair
+    from blademodel.zheng2022 import BladePair
     m = BladePair(friction="bilinear", gamma=8.0, F0=80.0).build()
     run = dict(transient=0, periods=20, kernel="contact")
     fine = simulate(m, steps_per_period=8000, detect_grazing=False, **run)

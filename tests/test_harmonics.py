@@ -5,7 +5,7 @@ import pytest
 
 from blademodel.analysis import harmonic_amplitudes
 from blademodel.commands.simulate import first_harmonics
-from blademodel.config import BladePair
+from blademodel.zheng2022 import BladePair
 from blademodel.numeric import simulate
 from blademodel.numeric.kernels import make_integrator
 from blademodel.sweep.point import run_point

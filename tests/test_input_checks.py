@@ -14,7 +14,8 @@ from pathlib import Path
 import pytest
 
 from blademodel import cli
-from blademodel.config import BladePair, BladedDisk, ConfigError, apply_overrides, load_config
+from blademodel.config import BladedDisk, ConfigError, apply_overrides, load_config
+from blademodel.zheng2022 import BladePair
 
 ROOT = Path(__file__).resolve().parents[1]
 PAIR = str(ROOT / "models" / "blade_pair_bilinear.yaml")

@@ -8,7 +8,7 @@ from numpy.testing import assert_allclose
 
 from blademodel.components import Contact, HarmonicForce, Iwan, Mass
 from blademodel.components.friction.iwan import continuous_energy_per_cycle, energy_per_cycle, uniform_fractions
-from blademodel.config import BladePair
+from blademodel.zheng2022 import BladePair
 from blademodel.model import Model
 from blademodel.numeric import HybridIntegrator, simulate
 from blademodel.numeric.energy import energy_balance

@@ -29,7 +29,7 @@ from itertools import pairwise
 import numpy as np
 import pytest
 
-from blademodel.config.blade_pair import BladePair
+from blademodel.zheng2022.blade_pair import BladePair
 from blademodel.numeric import StepTooLargeError, compile_model, simulate
 from blademodel.numeric.reference import ReferenceSystem, simulate_reference
 from blademodel.numeric.stability import rk4_amplification

@@ -13,7 +13,8 @@ import sympy as sp
 from sympy.physics.vector import dynamicsymbols
 
 from blademodel.components.friction.base import STICK
-from blademodel.config import BladePair, load_model
+from blademodel.config import load_model
+from blademodel.zheng2022 import BladePair
 from blademodel.symbolic import derive
 from blademodel.symbolic.assembly import contact_equations, derive_mode, mode_count, parse_assignment
 from blademodel.symbolic.display import definitions, equations, latex, pretty

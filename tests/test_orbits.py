@@ -5,7 +5,8 @@ import pytest
 from scipy.linalg import expm
 
 from blademodel.analysis.lyapunov import largest_lyapunov
-from blademodel.config import BladedDisk, BladePair
+from blademodel.config import BladedDisk
+from blademodel.zheng2022 import BladePair
 from blademodel.numeric import simulate
 from blademodel.numeric.kernels import make_integrator
 from blademodel.orbits import PeriodMap, ShootingError, find_periodic_orbit

@@ -37,7 +37,7 @@ from functools import cache
 import numpy as np
 import pytest
 
-from blademodel.config.blade_pair import BladePair
+from blademodel.zheng2022.blade_pair import BladePair
 from blademodel.numeric import simulate
 from blademodel.numeric.reference import ReferenceResult, simulate_reference
 

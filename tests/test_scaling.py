@@ -5,14 +5,11 @@ from functools import cache
 import pytest
 import sympy as sp
 
-from blademodel.config import BladePair, BladeValues
+from blademodel.config import BladeValues
+from blademodel.zheng2022 import BladePair
 from blademodel.symbolic import derive
-from blademodel.symbolic.scaling import (
-    TAU,
-    eq11_discrepancy,
-    paper_eq11,
-    scaled_equations,
-)
+from blademodel.symbolic.scaling import TAU, scaled_equations
+from blademodel.zheng2022.eq11 import eq11_discrepancy, paper_eq11
 
 
 def S(name):

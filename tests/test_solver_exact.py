@@ -12,7 +12,7 @@ from numpy.testing import assert_allclose
 from scipy.optimize import fsolve
 
 from blademodel.components import Contact, Coulomb, HarmonicForce, Jenkins, Mass, Spring
-from blademodel.config import BladePair
+from blademodel.zheng2022 import BladePair
 from blademodel.model import Model
 from blademodel.numeric import SimulationError, simulate
 from blademodel.numeric.energy import energy_balance
@@ -138,7 +138,7 @@ def test_fourth_order_convergence_through_events(friction):
 
 
 def test_jit_and_pure_python_give_the_same_result(tmp_path):
-    code = ("from blademodel.config import BladePair; from blademodel.numeric import simulate; "
+    code = ("from blademodel.zheng2022 import BladePair; from blademodel.numeric import simulate; "
             "import numpy as np, sys; r = simulate(BladePair(friction='bilinear', F0=90).build(), periods=2, "
             "steps_per_period=400); np.save(sys.argv[1], r.final_state)")
     env = dict(os.environ, NUMBA_DISABLE_JIT="1")

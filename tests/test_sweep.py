@@ -11,7 +11,7 @@ import pytest
 import xarray as xr
 
 from blademodel.sweep import Study, load_study, open_result, run_study
-from blademodel.sweep.studies import paper_figures
+from blademodel.zheng2022.studies import paper_figures
 
 STUDY = Study(name="t", base={"model": "blade_pair", "friction": "bilinear"}, laws=["coulomb", "bilinear"],
               sweep={"gamma": {"start": 2, "stop": 10, "num": 4}},

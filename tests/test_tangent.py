@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from blademodel.config import BladePair
+from blademodel.zheng2022 import BladePair
 from blademodel.numeric.kernels import make_integrator
 from blademodel.numeric.methods import get_method
 from blademodel.numeric.tangent import SensitivityError, flow_sensitivity

@@ -1,6 +1,7 @@
 """A shrouded bladed disk: a ring of blades with a frictional shroud contact between neighbours.
 
-Every blade is the paper's blade (Table 1 defaults, as in :class:`BladePair`); the
+Every blade is the paper's blade (Table 1 defaults, as in the paper's pair,
+:class:`blademodel.zheng2022.BladePair`); the
 blades are driven by a travelling wave of engine order ``EO``, may be mistuned, and
 each shroud contact may have its own gap, angle, stiffness ratio and friction.
 """
@@ -16,7 +17,8 @@ from pydantic import Field, field_validator, model_validator
 from ..components import Contact, Damper, FrictionLaw, HarmonicForce, Mass, Param, Spring
 from ..components.friction import registry
 from ..model import Model
-from .blade_pair import BladeValues, _Strict
+from .blade_values import BladeValues
+from .strict import StrictConfig as _Strict
 from .errors import FieldError
 from .friction_law import check_friction_options, make_friction_law
 
@@ -66,7 +68,7 @@ class BladedDisk(_Strict):
 
     Every contact has ``k = gamma * kx`` (or ``gamma * ky``) with the tuned
     ``kx`` and the disk's ``gap``, ``alpha``, ``mu``, ``kd`` and friction law
-    (see :class:`BladePair` for ``friction`` and ``friction_options``) unless
+    (see :class:`blademodel.zheng2022.BladePair` for ``friction`` and ``friction_options``) unless
     ``contacts`` overrides them for that contact.
 
     Symbols: a value common to all blades or contacts is one shared symbol

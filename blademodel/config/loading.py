@@ -1,9 +1,10 @@
 """Read a model config from YAML, with errors that point at the file and line.
 
-The ``model:`` key selects the format: ``blade_pair`` (:class:`BladePair`, the
-paper's pair with Table 1 defaults), ``components`` (:class:`ComponentsModel`, a
-list of components) or ``bladed_disk`` (:class:`BladedDisk`, a ring of the
-paper's blades). A validation error names the file, the line, the field path and
+The ``model:`` key selects the format: ``components`` (:class:`ComponentsModel`, a
+list of components), ``bladed_disk`` (:class:`BladedDisk`, a ring of the paper's
+blades) or a kind a plugin registers (:mod:`blademodel.config.kinds`), such as
+``blade_pair`` (:class:`blademodel.zheng2022.BladePair`, the paper's pair with
+Table 1 defaults). A validation error names the file, the line, the field path and
 the value::
 
     models/x.yaml:7: masses.0.m = -1.0: Input should be greater than 0
@@ -21,15 +22,15 @@ import yaml
 from pydantic import ValidationError
 
 from ..model import Model
-from .blade_pair import BladePair
 from .bladed_disk import BladedDisk
 from .components_format import ComponentsModel
 from .errors import ConfigError, FieldError, format_loc, format_value
+from .kinds import model_kinds, register_model_kind
 
-Config = Union[BladePair, ComponentsModel, BladedDisk]
+Config = Union[ComponentsModel, BladedDisk, Any]   # or a kind a plugin registers (blademodel.config.kinds)
 
-#: Config classes by the value of the ``model:`` key.
-FORMATS: dict[str, type] = {"blade_pair": BladePair, "components": ComponentsModel, "bladed_disk": BladedDisk}
+register_model_kind("components", ComponentsModel)
+register_model_kind("bladed_disk", BladedDisk)
 
 
 # --- locating errors -------------------------------------------------------------------
@@ -138,14 +139,16 @@ def config_from_data(data: Any, *, source: str = "<config>", root: Optional[yaml
         raise ConfigError(f"{source}: expected a mapping with a 'model:' key, got {format_value(data)}",
                           path=source)
     kind = data.get("model")
-    if kind not in FORMATS:
+    kinds = model_kinds()
+    if kind not in kinds:
         line = _line(root, ("model",)) if "model" in data else (1 if root is not None else None)
         where = f"{source}:{line}" if line else source
         what = f"model = {format_value(kind)}" if "model" in data else "model: missing key"
-        raise ConfigError(f"{where}: {what}: expected one of {', '.join(map(repr, FORMATS))}",
+        raise ConfigError(f"{where}: {what}: expected one of {', '.join(map(repr, kinds))} (further kinds come "
+                          f"from installed plugins: 'pip install -e .' registers the paper's 'blade_pair')",
                           path=source, line=line)
     try:
-        return FORMATS[kind].model_validate(data)
+        return kinds[kind].model_validate(data)
     except ValidationError as e:
         raise _validation_error(e, data, source, root) from None
 
@@ -213,7 +216,7 @@ def load_config(path: Union[str, Path]) -> Config:
 
     Returns
     -------
-    BladePair, BladedDisk or ComponentsModel
+    BladedDisk, ComponentsModel or a plugin's config (the paper's BladePair)
         Selected by the file's ``model:`` key.
 
     Raises

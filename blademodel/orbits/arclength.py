@@ -181,7 +181,7 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
     Parameters
     ----------
     config : pydantic config
-        E.g. :class:`~blademodel.config.BladePair`; rebuilt at each value of the field.
+        E.g. :class:`~blademodel.zheng2022.BladePair`; rebuilt at each value of the field.
     name : str
         The field: ``"omega"`` for a forced-response curve, or ``"gamma"``, ``"F0"`` ...
     start, stop : float

@@ -9,23 +9,12 @@ from pydantic import Field, field_validator, model_validator
 
 from ..components import Contact, Damper, HarmonicForce, Mass, Param, Spring
 from ..components.friction import registry
+from ..config.blade_values import BladeValues
+from ..config.friction_law import check_friction_options, make_friction_law
+from ..config.strict import StrictConfig
 from ..model import Model
-from .friction_law import check_friction_options, make_friction_law
-from .strict import StrictConfig
 
-
-
-_Strict = StrictConfig   # the name the config modules import
-
-
-class BladeValues(_Strict):
-    """Per-blade values for the general Eq. 2 (unset values fall back to the pair's)."""
-
-    m: Optional[float] = Field(None, gt=0, description="mass, kg")
-    kx: Optional[float] = Field(None, ge=0, description="tangential stiffness, N/m")
-    ky: Optional[float] = Field(None, ge=0, description="axial stiffness, N/m")
-    cx: Optional[float] = Field(None, ge=0, description="tangential damping, N s/m")
-    cy: Optional[float] = Field(None, ge=0, description="axial damping, N s/m")
+_Strict = StrictConfig
 
 
 class BladePair(_Strict):

@@ -9,8 +9,8 @@ from pathlib import Path
 
 from ..sweep import load_study, open_result
 from ..sweep.claims import check_claims, claims_table, tally
-from ..sweep.studies import paper_figures, summarize
-from .sweep import add_run_arguments, default_out, execute
+from .studies import paper_figures, summarize
+from ..commands.sweep import add_run_arguments, default_out, execute
 
 
 def register(subparsers) -> argparse.ArgumentParser:

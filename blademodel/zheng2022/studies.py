@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .point import motion_label
+from ..sweep.point import motion_label
 
 
 def studies_dir() -> Path:

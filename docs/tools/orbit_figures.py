@@ -17,7 +17,8 @@ matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from blademodel.config import BladePair, apply_overrides, load_config  # noqa: E402
+from blademodel.config import apply_overrides, load_config  # noqa: E402
+from blademodel.zheng2022 import BladePair
 from blademodel.orbits import continuation, period_doubled_branch  # noqa: E402
 from blademodel.plots.branch import branch_figure  # noqa: E402
 
