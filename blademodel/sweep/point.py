@@ -35,6 +35,17 @@ def build_config(base: dict, overrides: dict):
 _P0_MEMO: dict = {}
 
 
+def observed(model) -> tuple[str, ...]:
+    """The coordinates a sweep point observes: those of the model's first mass.
+
+    One rule for every model: the Poincare samples and the kept history are of the
+    first of them (stored as ``poincare_x1``, ``history_x1`` ...: ``x1`` in the
+    paper's pair and in a bladed disk), ``P`` and ``P_d`` sum the squares of all of
+    them (``x1`` and ``y1`` there, MODEL.md section 7).
+    """
+    return model.masses[0].coordinates
+
+
 def _reference_mean_square(model, run: dict) -> float:
     """``P0``: the same mean for the model without contacts (memoised: a gap or gamma sweep shares it)."""
     model0 = without_contacts(model)
@@ -43,7 +54,7 @@ def _reference_mean_square(model, run: dict) -> float:
     if key not in _P0_MEMO:
         _P0_MEMO[key] = mean_square_run(model0, transient=run["transient"], periods=run["periods"],
                                         steps_per_period=run["steps_per_period"], event_tol=run["event_tol"],
-                                        names=("x1", "y1"))
+                                        names=observed(model))
     return _P0_MEMO[key]
 
 
@@ -64,7 +75,8 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
     Returns
     -------
     dict
-        ``poincare_x1``, ``poincare_vx1`` (SI, one per recorded period),
+        ``poincare_x1``, ``poincare_vx1`` (SI, one per recorded period; of the first
+        :func:`observed` coordinate, ``x1`` in the paper's models),
         ``length_scale``, ``period``, ``motion`` (code), ``lyapunov`` (1/period),
         ``P``, ``P0``, ``Pd`` (percent), ``events``, ``final_state``, ``harmonic1`` (the
         first-harmonic amplitude of every coordinate and velocity over the recorded
@@ -99,7 +111,8 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
         if status:
             raise RuntimeError(f"integration failed at t = {t:.6g} s ({STATUS_NAMES.get(status, status)})")
         names = integ.state_names
-        ix, iv = names.index("x1") if "x1" in names else 0, names.index("vx1") if "vx1" in names else 0
+        first = observed(model)[0]
+        ix, iv = names.index(first), names.index(f"v{first}")
         n_phys = len(model.coordinates) * 2
         scale_len = model.length_scale or float("nan")
         out = {"poincare_x1": poinc[:, ix].copy(), "poincare_vx1": poinc[:, iv].copy(),
@@ -121,7 +134,7 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
             out.update(history_t=rec[0][tail].copy(), history_x1=rec[1][tail, ix].copy(),
                        history_vx1=rec[1][tail, iv].copy())
         if want_pd:
-            P, P0 = mean_square(rec[1], names), _reference_mean_square(model, run)
+            P, P0 = mean_square(rec[1], names, observed(model)), _reference_mean_square(model, run)
             out.update(P=P, P0=P0, Pd=vibration_reduction(P, P0))
         return out
     except Exception as e:  # a failed point is recorded, the sweep goes on
