@@ -8,7 +8,6 @@ whose type holds numbers and no booleans, naming the field and the value.
 
 from __future__ import annotations
 
-import types
 import typing
 from typing import Any
 
