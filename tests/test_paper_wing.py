@@ -3,7 +3,6 @@
 import ast
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 import blademodel
@@ -73,34 +72,3 @@ def test_reproduce_is_a_command():
         main(["reproduce", "--help"])
     assert e.value.code == 0
 
-
-def test_pd_and_sections_of_any_model_follow_one_rule():
-    """A components model whose coordinate is ``x_m`` (no ``x1``): a preloaded frictionless wall that never opens
-    adds its stiffness and a static offset. P_d and the Poincare samples come from the first mass's coordinate and
-    equal the closed forms: mean square ``d^2 + X^2 / 2`` with and without the wall, samples on ``d + X sin(...)``."""
-    from blademodel.sweep.point import observed, run_point
-    from blademodel.config import config_from_data
-
-    m, k, c, kc, gap, F, w = 1.0, 100.0, 4.0, 100.0, -0.01, 0.1, 9.0
-    base = {"model": "components", "name": "wall",
-            "parameters": {"omega": w},
-            "masses": [{"name": "m", "m": m, "dofs": ["x"]}],
-            "springs": [{"a": "x_m", "k": k}], "dampers": [{"a": "x_m", "c": c}],
-            "forces": [{"mass": "m", "amplitude": F, "omega": "omega"}],
-            "contacts": [{"name": "wall", "bodies": ["m", "ground"], "alpha": 1.5707963267948966, "gap": gap,
-                          "k": kc}]}
-    assert observed(config_from_data(dict(base)).build()) == ("x_m",)
-    run = {"transient": 60, "periods": 20, "steps_per_period": 1000, "event_tol": 1e-10, "lyapunov_periods": 0,
-           "vibration_reduction": True, "history_periods": 0}
-    out = run_point(base, {}, run)
-    assert "error" not in out, out.get("error")
-    assert out["events"] == 0   # the wall never lets go
-    d = -kc * (-gap) / (k + kc)   # delta = x - gap > 0: N = kc (x - gap) pushes x back
-    X = F / np.hypot(k + kc - m * w ** 2, c * w)
-    X0 = F / np.hypot(k - m * w ** 2, c * w)
-    P, P0 = d ** 2 + X ** 2 / 2, X0 ** 2 / 2
-    np.testing.assert_allclose([out["P"], out["P0"]], [P, P0], rtol=1e-6)
-    np.testing.assert_allclose(out["Pd"], (P0 - P) / P0 * 100, rtol=1e-6)
-    phase = np.arctan2(c * w, k + kc - m * w ** 2)
-    t = 2 * np.pi / w * np.arange(61, 81)
-    np.testing.assert_allclose(out["poincare_x1"], d + X * np.sin(w * t - phase), atol=1e-8 * X)

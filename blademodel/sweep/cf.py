@@ -32,8 +32,8 @@ VARIABLES = {
     "period": ("period n of the Poincare samples (0: none up to 16)", None),
     "motion": ("motion class: n > 0 period-n, 0 nonperiodic, -1 quasi-periodic, -2 chaos", None),
     "lyapunov": ("largest Lyapunov exponent per excitation period", None),
-    "P": ("mean square of x1 over the recorded periods", "m2"),
-    "P0": ("mean square of x1 without contacts", "m2"),
+    "P": ("mean square of x1 and y1 over the recorded periods (summed)", "m2"),
+    "P0": ("mean square of x1 and y1 without contacts (summed)", "m2"),
     "Pd": ("vibration reduction (P0 - P) / P0", "percent"),
     "events": ("events (impacts, separations, stick-slip transitions) over the recorded periods", None),
     "max_cone_ratio": ("largest friction force of a sticking Coulomb contact over mu N", None),
@@ -76,11 +76,19 @@ def field_metadata(config, field: str) -> tuple[str, Optional[str]]:
     return f"{description} ({field})", None
 
 
-def annotate(ds, *, fields: list[str], field_meta: dict, title: str, config_json: Optional[str]) -> None:
-    """Put the CF attributes on a result file being created (a :class:`netCDF4.Dataset` in define mode)."""
+def annotate(ds, *, fields: list[str], field_meta: dict, title: str, config_json: Optional[str],
+             observe: Optional[list[str]] = None) -> None:
+    """Put the CF attributes on a result file being created (a :class:`netCDF4.Dataset` in define mode).
+
+    ``observe``: the observed coordinates; the ``x1``-named variables hold the first
+    of them and their long names say which.
+    """
     auxiliary = " ".join([f"param_{f}" for f in fields] + ["law"])
+    observe = list(observe or ["x1", "y1"])
     for name, var in ds.variables.items():
         long_name, units = VARIABLES.get(name, (None, None))
+        if long_name and (name.endswith("x1") or name in ("P", "P0")):
+            long_name = long_name.replace("x1 and y1", " and ".join(observe)).replace("x1", observe[0])
         if name.startswith("param_"):
             long_name, units = field_meta.get(name[len("param_"):], (f"swept field {name[6:]}", None))
         if long_name:
@@ -100,3 +108,4 @@ def annotate(ds, *, fields: list[str], field_meta: dict, title: str, config_json
                   "(blademodel.open_result verifies the checksums).")
     if config_json is not None:
         ds.setncattr("config", config_json)
+    ds.setncattr("observed", " ".join(observe))

@@ -35,26 +35,38 @@ def build_config(base: dict, overrides: dict):
 _P0_MEMO: dict = {}
 
 
-def observed(model) -> tuple[str, ...]:
-    """The coordinates a sweep point observes: those of the model's first mass.
+def observed(model, names=None) -> tuple[str, ...]:
+    """The coordinates a sweep point observes: ``names`` (the study's ``run.observe``), else the first mass's.
 
     One rule for every model: the Poincare samples and the kept history are of the
-    first of them (stored as ``poincare_x1``, ``history_x1`` ...: ``x1`` in the
-    paper's pair and in a bladed disk), ``P`` and ``P_d`` sum the squares of all of
-    them (``x1`` and ``y1`` there, MODEL.md section 7).
+    first of them (stored as ``poincare_x1``, ``history_x1`` ..., named in the file's
+    ``observed`` attribute: ``x1`` in the paper's pair and in a bladed disk), ``P``
+    and ``P_d`` sum the squares of all of them (``x1`` and ``y1`` there, MODEL.md
+    section 7).
+
+    Raises
+    ------
+    ValueError
+        If a name is not a coordinate of ``model``.
     """
-    return model.masses[0].coordinates
+    if not names:
+        return model.masses[0].coordinates
+    unknown = [n for n in names if n not in model.coordinates]
+    if unknown:
+        raise ValueError(f"run.observe = {list(names)}: {', '.join(map(repr, unknown))} is not a coordinate of the "
+                         f"model ({', '.join(model.coordinates)})")
+    return tuple(names)
 
 
 def _reference_mean_square(model, run: dict) -> float:
     """``P0``: the same mean for the model without contacts (memoised: a gap or gamma sweep shares it)."""
     model0 = without_contacts(model)
     key = (model0.structure_key(), tuple(sorted(model0.parameters.items())), run["transient"], run["periods"],
-           run["steps_per_period"])
+           run["steps_per_period"], tuple(observed(model, run.get("observe"))))
     if key not in _P0_MEMO:
         _P0_MEMO[key] = mean_square_run(model0, transient=run["transient"], periods=run["periods"],
                                         steps_per_period=run["steps_per_period"], event_tol=run["event_tol"],
-                                        names=observed(model))
+                                        names=observed(model, run.get("observe")))
     return _P0_MEMO[key]
 
 
@@ -111,7 +123,7 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
         if status:
             raise RuntimeError(f"integration failed at t = {t:.6g} s ({STATUS_NAMES.get(status, status)})")
         names = integ.state_names
-        first = observed(model)[0]
+        first = observed(model, run.get("observe"))[0]
         ix, iv = names.index(first), names.index(f"v{first}")
         n_phys = len(model.coordinates) * 2
         scale_len = model.length_scale or float("nan")
@@ -134,7 +146,7 @@ def run_point(base: dict, overrides: dict, run: dict, y0=None) -> dict:
             out.update(history_t=rec[0][tail].copy(), history_x1=rec[1][tail, ix].copy(),
                        history_vx1=rec[1][tail, iv].copy())
         if want_pd:
-            P, P0 = mean_square(rec[1], names, observed(model)), _reference_mean_square(model, run)
+            P, P0 = mean_square(rec[1], names, observed(model, run.get("observe"))), _reference_mean_square(model, run)
             out.update(P=P, P0=P0, Pd=vibration_reduction(P, P0))
         return out
     except Exception as e:  # a failed point is recorded, the sweep goes on

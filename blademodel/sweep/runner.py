@@ -17,7 +17,7 @@ from .lock import ResultLock
 from ..analysis import motion_class
 from ..progress import Progress
 from .cf import field_metadata
-from .point import build_config, motion_code, run_point
+from .point import build_config, motion_code, observed, run_point
 from .spec import Study
 
 
@@ -147,6 +147,7 @@ def run_study(study: Study, out: str | Path, *, workers: int | None = None, sche
     for law in sorted(set(laws)):
         config = build_config(study.base, overrides[laws.index(law)])
         model = config.build()
+        observe = observed(model, run["observe"])
         names = _state_names(model)
         if len(names) > n_state:
             n_state, state_names = len(names), names
@@ -154,7 +155,7 @@ def run_study(study: Study, out: str | Path, *, workers: int | None = None, sche
             base_config = build_config(study.base, {})
     field_meta = {f: field_metadata(base_config, f) for f in fields}
     layout = dict(study_json=study_json, fields=fields, values=values, laws=laws, periods=run["periods"],
-                  n_state=n_state, state_names=state_names, field_meta=field_meta,
+                  n_state=n_state, state_names=state_names, field_meta=field_meta, observe=list(observe),
                   config_json=base_config.model_dump_json(),
                   history=run["history_periods"] * run["steps_per_period"] + 1 if run["history_periods"] else 0)
     total = len(values)

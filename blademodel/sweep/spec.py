@@ -59,6 +59,10 @@ class RunSettings(_Strict):
     vibration_reduction: bool = Field(False, description="compute P_d against the contact-free system")
     warm_start: bool = Field(False, description="start each point from the previous point's final state")
     history_periods: int = Field(0, ge=0, description="last periods kept as a time history (case figures)")
+    observe: Optional[list[str]] = Field(None, min_length=1,
+                                         description="coordinates a point observes: P and P_d over all of them, "
+                                                     "Poincare samples and history of the first (default: the "
+                                                     "first mass's coordinates)")
 
 
 class Claim(_Strict):

@@ -57,10 +57,12 @@ def _chars(text: str, n: int) -> np.ndarray:
 def study_signature(study_json: str) -> str:
     """What must match for a file to be resumed: the study without presentation fields."""
     d = json.loads(study_json)
-    for k in ("title", "paper", "plot"):
+    for k in ("title", "paper", "plot", "claims"):
         d.pop(k, None)
     if not d.get("law_options"):
         d.pop("law_options", None)   # files written before law_options existed still resume
+    if d.get("run", {}).get("observe") is None:
+        d.get("run", {}).pop("observe", None)   # likewise run.observe
     return json.dumps(d, sort_keys=True)
 
 
@@ -74,12 +76,14 @@ def _fsync(path: Path) -> None:
 
 def create(path: Path, *, study_json: str, fields: list[str], values: list[list], laws: list[str],
            periods: int, n_state: int, history: int, state_names: list[str] | None = None,
-           field_meta: dict | None = None, config_json: str | None = None) -> None:
+           field_meta: dict | None = None, config_json: str | None = None,
+           observe: list[str] | None = None) -> None:
     """Lay out a new result file for ``len(values)`` points (written aside, then renamed into place).
 
     ``state_names`` name the ``state`` coordinate, ``field_meta`` gives each swept
-    field's ``(long_name, units)`` and ``config_json`` is the full validated base
-    config (attribute ``config``); see :mod:`blademodel.sweep.cf`.
+    field's ``(long_name, units)``, ``config_json`` is the full validated base
+    config (attribute ``config``) and ``observe`` the observed coordinates (attribute
+    ``observed``, :func:`~blademodel.sweep.point.observed`); see :mod:`blademodel.sweep.cf`.
     """
     path = Path(path)
     tmp = path.with_name(path.name + ".new")
@@ -135,7 +139,7 @@ def create(path: Path, *, study_json: str, fields: list[str], values: list[list]
         ds.createVariable("tail", "i4", ()).assignValue(TAIL_MAGIC)   # last: at the end of the file
         ds["tail"].long_name = "end marker: reads 0 in a file cut short"
         annotate(ds, fields=fields, field_meta=field_meta or {}, title=json.loads(study_json).get("title", ""),
-                 config_json=config_json)
+                 config_json=config_json, observe=observe)
     _fsync(tmp)
     tmp.replace(path)
 
