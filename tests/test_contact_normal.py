@@ -94,6 +94,7 @@ def pair_like(damping=None, law=None, normal_load=None):
     return Model((mass,), springs, forces=(force,), contacts=(Contact(mass, None, name="c", **kw),))
 
 
+@pytest.mark.slow   # a cold compile of its own structures: ~20-80 s in CI; the default run checks the same physics elsewhere
 def test_zero_damping_parameter_reproduces_the_contact_spring():
     base = simulate(pair_like(), periods=4, steps_per_period=1000)
     zero = simulate(pair_like(damping=Param("cn", 0.0)), periods=4, steps_per_period=1000)
@@ -102,7 +103,8 @@ def test_zero_damping_parameter_reproduces_the_contact_spring():
     np.testing.assert_allclose(zero.final_state, base.final_state, rtol=0, atol=1e-12 * np.abs(base.y).max())
 
 
-@pytest.mark.parametrize("law", [Coulomb(0.3), Jenkins(0.3, 2e5)], ids=["coulomb", "jenkins"])
+@pytest.mark.parametrize("law", [Coulomb(0.3), pytest.param(Jenkins(0.3, 2e5), marks=pytest.mark.slow)],
+                         ids=["coulomb", "jenkins"])   # jenkins: slow (a cold compile)
 def test_kernels_agree_on_a_damped_friction_contact(law):
     model = pair_like(damping=30.0, law=law)
     # 4000 steps: the damped contact's dissipation converges from 1.4e-7 of the throughput at 1000
@@ -234,7 +236,8 @@ contacts:
             load_model(str(path))
 
 
-@pytest.mark.parametrize("case", ["damped coulomb", "damped jenkins", "load coulomb"])
+@pytest.mark.parametrize("case", ["damped coulomb", pytest.param("damped jenkins", marks=pytest.mark.slow),
+                                  "load coulomb"])   # damped jenkins: slow (a cold compile)
 def test_tangent_monodromy_equals_differences(case):
     """The product-mode kernel's tangent differentiates through the new guards (a damped contact's
     opening at ``N = 0``, its Piecewise closing guard, Jenkins' ``Ndot`` with accelerations)."""
@@ -252,6 +255,7 @@ def test_tangent_monodromy_equals_differences(case):
     assert np.max(np.abs(s.monodromy - J)) < 1e-6 * np.max(np.abs(s.monodromy))
 
 
+@pytest.mark.slow   # a cold compile of its own structures: ~20-80 s in CI; the default run checks the same physics elsewhere
 def test_normal_load_replaces_the_preloaded_ground_contact(tmp_path):
     """``models/friction_oscillator.yaml`` presses its mass with ``normal_load: N`` (20 N); the old way, a
     ground contact with a preload (a negative gap, N = -kc Delta = 20 N), is the same oscillator, to rounding."""
@@ -294,6 +298,7 @@ def test_damping_refuses_a_law_whose_force_uses_Ndot():
         Contact(b, None, gap=0.0, alpha=0.0, k=1.0, damping=2.0, friction=RateFriction())
 
 
+@pytest.mark.slow   # a cold compile of its own structures: ~20-80 s in CI; the default run checks the same physics elsewhere
 def test_two_contacts_damped_and_loaded_both_kernels(tmp_path):
     """A damped wall and a constant-load friction damper on one forced mass, from YAML: the
     per-contact kernel (the default for two contacts) and the product-mode kernel agree, and

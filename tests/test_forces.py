@@ -157,6 +157,8 @@ def far_walls(m1, m2):
 
 
 KERNELS = [("product", ()), ("contact", ()), ("auto", far_walls(None, None))]
+#: The same, with the two-contact case slow (a cold compile of its own: ~12 s in CI).
+KERNELS_LEAN = KERNELS[:2] + [pytest.param(*KERNELS[2], marks=pytest.mark.slow)]
 
 
 def _check_exact(model, M, C, K, loads, kernel, periods, period=None):
@@ -171,7 +173,7 @@ def _check_exact(model, M, C, K, loads, kernel, periods, period=None):
     return r
 
 
-@pytest.mark.parametrize("kernel, contacts", KERNELS, ids=[k for k, _ in KERNELS])
+@pytest.mark.parametrize("kernel, contacts", KERNELS_LEAN, ids=[k for k, _ in KERNELS])
 def test_a_released_oscillator_settles_at_the_shifted_equilibrium(kernel, contacts):
     """A constant force alone: the exact step response, which ends at ``K^-1 F`` (gravity: ``m g / k``)."""
     g = 9.81
@@ -300,7 +302,7 @@ def test_the_yaml_example_of_the_docs_builds():
     assert float(gravity) == pytest.approx(-0.085 * 9.81, rel=1e-3)
 
 
-@pytest.mark.parametrize("kernel", ["product", "contact"])
+@pytest.mark.parametrize("kernel", ["product", pytest.param("contact", marks=pytest.mark.slow)])   # contact: ~20 s
 def test_the_work_of_gravity_enters_the_energy_balance(kernel):
     """Gravity presses a driven mass on a Coulomb contact: the balance closes with gravity's work in ``W_in``."""
     from blademodel.components import Coulomb
