@@ -8,7 +8,7 @@ import pytest
 from blademodel.config import BladedDisk
 from blademodel.zheng2022 import BladePair
 from blademodel.numeric import simulate
-from blademodel.numeric.contact_loop import MAX_LOCATE_TRIALS
+from blademodel.numeric.contact_locate import MAX_LOCATE_TRIALS
 from blademodel.numeric.integrator import EVENT_TOL_FLOOR
 
 

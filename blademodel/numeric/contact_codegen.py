@@ -3,8 +3,9 @@
 The module holds, in this order: each law kind's functions
 (:func:`~blademodel.numeric.law_codegen.law_code`), dispatchers on the kind
 number ``K``, the tables describing the kinds (modes, guards, directions, rigid
-stick), and the template :mod:`.contact_loop`. Its size depends on the law kinds
-only, never on the number of contacts or blades.
+stick, states), and the kernel's templates (``TEMPLATES``, described in
+:mod:`.contact_loop`). Its size depends on the law kinds only, never on the number
+of contacts or blades.
 """
 
 from __future__ import annotations
@@ -13,8 +14,14 @@ import inspect
 import re
 
 from ..components.friction.base import FrictionLaw
-from . import bracket, contact_loop, contact_rigid_stubs
+from . import (bracket, contact_clusters, contact_events, contact_flow, contact_guards, contact_locate, contact_loop,
+               contact_rigid_stubs, contact_stick)
 from .law_codegen import law_code
+
+#: The kernel's templates, in the order they are pasted (:mod:`.contact_loop` describes them);
+#: ``contact_rigid_stubs`` follows when no law kind has a rigid stick mode.
+TEMPLATES = (bracket, contact_flow, contact_stick, contact_guards, contact_locate, contact_events, contact_clusters,
+             contact_loop)
 
 #: Functions compiled with Numba (``njit(cache=True)``).
 #: Functions called from Python: cached on disk with all they call compiled into them.
@@ -24,16 +31,15 @@ _ENTRY_POINTS = ("integrate", "initial_modes", "rhs", "factor_stick", "contact_f
 
 #: Helpers that return views of the flat buffers: inlined (a function compiled without
 #: reference counting may only return an array it was given).
-_VIEWS = ("vec", "mat", "wvec", "law_offset")
+_VIEWS = ("vec", "wvec", "wdof", "wrow", "law_offset")
 
-_TEMPLATE_FUNCTIONS = ("runtime", "vec", "mat", "wvec", "law_offset", "record", "factor_stick", "back_substitute", "solve_stick", "slip_bound", "least_cone_ratio",
-                       "contact_forces", "penetration_acceleration", "normal_guard", "normal_guard_rate", "rates", "rhs", "rhs_guards", "rk4_step", "rk_step", "guards_of_forces", "eval_guards",
-                       "crossed", "first_crossing", "cone_ratio", "first_near_crossing", "guard_rates",
-                       "stick_force_rates", "stick_solution", "contact_rates",
-                       "locate_trial", "copy_guards", "hermite", "hermite_root", "hermite_extremum",
-                       "grazing_candidate", "inverse_quadratic", "safeguarded_trial", "predicted_root",
-                       "earliest_crossing", "locate_event", "apply_transition", "project_onto_stick", "resolve_friction",
-                       "rigid_problem", "log_event", "settle_event", "initial_modes", "integrate")
+
+def template_functions(module) -> list[str]:
+    """Names of the functions a template defines, in source order."""
+    own = [(obj.__code__.co_firstlineno, name) for name, obj in vars(module).items()
+           if inspect.isfunction(obj) and obj.__module__ == module.__name__]
+    return [name for _, name in sorted(own)]
+
 
 # Every function is compiled without Numba's reference counting (``_nrt=False``):
 # passing the table tuples to a function costs about 0.6 us a call in atomic
@@ -53,12 +59,16 @@ _DISPATCH = {
 }
 
 
-_VIEW_CALL = re.compile(r"(?<![\w.])(vec|mat|wvec|law_offset)\(([^()]*)\)")
+_VIEW_CALL = re.compile(r"(?<![\w.])(vec|wvec|wdof|wrow|law_offset)\(([^()]*)\)")
 #: The views written out (``a``, ``I``, ``key``, ... are the call's arguments, all plain names).
+_WD = "W_HEAD + WC_COUNT * ({nc})"
 _VIEW_EXPANSION = {
     "vec": lambda a, I, key, size: f"{a}[{I}[{key}]:{I}[{key}] + {size}]",
-    "mat": lambda a, I, key, rows, cols: f"{a}[{I}[{key}]:{I}[{key}] + ({rows}) * ({cols})].reshape(({rows}, {cols}))",
-    "wvec": lambda WI, nc, k: f"{WI}[2 + ({k}) * ({nc}):2 + ({k} + 1) * ({nc})]",
+    "wvec": lambda WI, nc, k: f"{WI}[W_HEAD + ({k}) * ({nc}):W_HEAD + ({k} + 1) * ({nc})]",
+    "wdof": lambda WI, nc, n, k: (f"{WI}[{_WD.format(nc=nc)} + ({k}) * ({n}):"
+                                  f"{_WD.format(nc=nc)} + ({k} + 1) * ({n})]"),
+    "wrow": lambda WI, nc, n, ns: (f"{WI}[{_WD.format(nc=nc)} + WD_COUNT * ({n}):"
+                                   f"{_WD.format(nc=nc)} + WD_COUNT * ({n}) + ({ns})]"),
     "law_offset": lambda I, j: f"(2 * {I}[H_N] + {I}[{I}[O_CSO] + {j}])",
 }
 
@@ -119,26 +129,28 @@ def generate_contact_kernel(laws: list[FrictionLaw]) -> tuple[str, dict]:
     stick = [[int(c.stick[m]) if m < len(c.modes) else 0 for m in range(maxm)] for c in codes] or [[0]]
     rigid = [list(c.rigid) if c.rigid else [-1, -1, -1] for c in codes] or [[-1, -1, -1]]
     nst = [c.n_states for c in codes] or [0]
+    open_rates = [int(c.open_rates) for c in codes] or [0]
     L.append(f"GMAX = {gmax}")
     L.append(f"NG = np.array({table(ng)}, dtype=np.int64).reshape({nk}, {maxm})")
     L.append(f"GDIR = np.array({table(gdir)}, dtype=np.int64).reshape({nk}, {maxm}, {gmax})")
     L.append(f"IS_STICK = np.array({table(stick)}, dtype=np.int64).reshape({nk}, {maxm})")
     L.append(f"RIGID = np.array({table(rigid)}, dtype=np.int64).reshape({nk}, 3)")
     L.append(f"NSTATES = np.array({table(nst)}, dtype=np.int64)")
+    L.append(f"OPEN_RATES = np.array({table(open_rates)}, dtype=np.int64)")
     L.append("")
-    L.append("# ---- event bracketing (blademodel/numeric/bracket.py) ----")
-    L.append(inspect.getsource(bracket))
-    L.append("# ---- the per-contact loop (blademodel/numeric/contact_loop.py) ----")
-    L.append(expand_views(inspect.getsource(contact_loop)))
-    L.append("")
+    templates = list(TEMPLATES)
     if not any(c.rigid for c in codes):
-        L.append("# ---- no rigid stick (blademodel/numeric/contact_rigid_stubs.py) ----")
-        L.append(inspect.getsource(contact_rigid_stubs))
+        templates.append(contact_rigid_stubs)
+    functions: list[str] = []
+    for mod in templates:
+        L.append(f"# ---- {mod.__name__} ----")
+        L.append(expand_views(inspect.getsource(mod)))
         L.append("")
+        functions += [f for f in template_functions(mod) if f not in functions]
     fns = [f"law{K}_{f}" for K in range(len(codes))
            for f in ("force", "rates", "guards", "guard_rates", "force_rate", "transition", "energy",
                       "dissipation")]
-    for fn in (*fns, *_DISPATCH, *_TEMPLATE_FUNCTIONS):
+    for fn in (*fns, *_DISPATCH, *functions):
         inline = ", inline='always'" if fn in _VIEWS else ""
         # Only entry points are called from Python: the others need no CPython or C wrapper.
         cache = "cache=True, " if fn in _ENTRY_POINTS else "no_cpython_wrapper=True, no_cfunc_wrapper=True, "

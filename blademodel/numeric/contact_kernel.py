@@ -20,6 +20,7 @@ import hashlib
 import json
 import math
 import os
+from pathlib import Path
 
 import numpy as np
 
@@ -36,9 +37,11 @@ _MEMO: dict = {}
 
 def _code_version() -> str:
     """Hash of the template, the generators, the contract and the package's friction laws."""
+    from .contact_codegen import TEMPLATES
     here = PACKAGE / "numeric"
-    return hash_sources([here / n for n in ("bracket.py", "contact_loop.py", "contact_rigid_stubs.py", "contact_codegen.py",
-                                            "law_codegen.py", "contract.py")]
+    return hash_sources([Path(m.__file__) for m in TEMPLATES]
+                        + [here / n for n in ("contact_rigid_stubs.py", "contact_codegen.py", "law_codegen.py",
+                                              "contract.py")]
                         + package_sources("components/friction"))
 
 
@@ -132,22 +135,51 @@ def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4") -> tup
     for j in range(nc):
         Wi += [k for k in range(nc) if k != j and W[j, k] != 0.0]
         Wp.append(len(Wi))
-    ints = pack([Kp, Ki, Cp, Ci, fi, fg, tables.cidx, tables.claw, tables.cso, tables.LP, Wp, Wi, tables.cnk],
-                [*range(contract.O_KP, contract.O_WI + 1), contract.O_CNK], np.int64, contract.H_SIZE)
+    # locality: forcing entries by coordinate, contacts by coordinate, coordinates coupled by K and C
+    order = np.argsort(np.asarray(fi, dtype=np.int64), kind="stable")
+    fi, fg, fs, fc = (np.asarray(a)[order] for a in (fi, fg, fs, fc))
+    Fp = np.searchsorted(fi, np.arange(n + 1)) if len(fi) else np.zeros(n + 1, dtype=np.int64)
+    touching: list[list[int]] = [[] for _ in range(n)]
+    for j in range(nc):
+        for i in sorted({int(i) for i in tables.cidx[j] if i >= 0}):
+            touching[i].append(j)
+    Dp, Di = _csr_lists(touching)
+    coupled: list[set] = [set() for _ in range(n)]
+    for p, ix in (Kp, Ki), (Cp, Ci):
+        for i in range(n):
+            for e in range(p[i], p[i + 1]):
+                if ix[e] != i:
+                    coupled[i].add(int(ix[e]))
+                    coupled[int(ix[e])].add(i)
+    Ap, Ai = _csr_lists([sorted(c) for c in coupled])
+    ints = pack([Kp, Ki, Cp, Ci, fi, fg, tables.cidx, tables.claw, tables.cso, tables.LP, Wp, Wi, tables.cnk,
+                 Fp, Dp, Di, Ap, Ai],
+                [*range(contract.O_KP, contract.O_WI + 1), contract.O_CNK, contract.O_FP, contract.O_DP,
+                 contract.O_DI, contract.O_AP, contract.O_AI], np.int64, contract.H_SIZE)
     R = pack([tables.invm, Kv, Cv, fs, fc, om, tables.cgn, tables.cgr, tables.cgap, tables.ck, tables.p, tables.W,
               tableau, tables.cc, tables.cn0],
              [*range(contract.R_INVM, contract.R_RK + 1), contract.R_CC, contract.R_N0], np.float64, 0)
     sizes = [n] + [m] * 9 + [contract.MAX_GROUPS, contract.MAX_GROUPS, contract.MAX_LAW_STATES, n_state, m * m,
-                             m, 1, n, m]
+                             m, 1, n, m, 3]
     WF = pack([np.zeros(k) for k in sizes],
               [contract.F_F, contract.F_N, contract.F_ND, contract.F_V, contract.F_FR, contract.F_DL, contract.F_X,
                contract.F_D, contract.F_NULL, contract.F_B, contract.F_SG, contract.F_CG, contract.F_Z,
-               contract.F_YEV, contract.F_L, contract.F_DR, contract.F_T, contract.F_FD, contract.F_XD],
+               contract.F_YEV, contract.F_L, contract.F_DR, contract.F_T, contract.F_FD, contract.F_XD,
+               contract.F_ACC],
               np.float64, 0)
     WF[header[contract.F_T]] = math.nan   # the time of the forcing's sin and cos in F_SG, F_CG: none yet
     I = np.concatenate([header, ints])
-    WI = np.zeros(2 + 7 * m, dtype=np.int64)
+    WI = np.zeros(contract.W_HEAD + contract.WC_COUNT * nc + contract.WD_COUNT * n + n_state, dtype=np.int64)
+    WI[contract.W_FULL] = 1
+    WI[contract.W_NULL] = -1
     return I, R, WI, WF
+
+
+def _csr_lists(rows) -> tuple[np.ndarray, np.ndarray]:
+    """``(p, i)`` of a CSR structure holding the lists ``rows``."""
+    p = np.zeros(len(rows) + 1, dtype=np.int64)
+    p[1:] = np.cumsum([len(r) for r in rows]) if rows else []
+    return p, np.array([x for r in rows for x in r], dtype=np.int64)
 
 
 class ContactIntegrator(Integrator):
@@ -218,7 +250,7 @@ class ContactIntegrator(Integrator):
         self.method = get_method(method)
         self.I, self.R, self.WI, self.WF = pack_tables(self.tables, self.n_state, method)
         self.SC = np.zeros((contract.SC_ROWS + max(self.method.stages - 1, 0), self.n_state))
-        self.GS = np.zeros((9, max(self.nc, 1), self.kmeta["gmax"]))
+        self.GS = np.zeros((contract.GS_ROWS, max(self.nc, 1), self.kmeta["gmax"]))
         if max([len(k["states"]) for k in self.kmeta["kinds"]] + [0]) > contract.MAX_LAW_STATES:
             raise ValueError(f"a friction law has more than {contract.MAX_LAW_STATES} states")
         if check_stability:

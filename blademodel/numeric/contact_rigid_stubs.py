@@ -1,26 +1,41 @@
 """The rigid-stick part of the per-contact kernel, for law kinds that have no rigid stick.
 
-A *template* like :mod:`.contact_loop`: pasted after it into a generated module
-(:mod:`.contact_codegen`) when no friction-law kind has a rigid stick mode
-(frictionless contacts, Jenkins, Iwan ...). It redefines the functions of the stick
-solver and of the friction complementarity problem with what they reduce to when
-no contact can stick rigidly: the stick set is always empty and every event is
-settled by the guard transitions alone. The kernel's results are the same; what
-is saved is compiling a solver that could never run (about a quarter of the cold
-compile).
+A *template* like :mod:`.contact_stick`: pasted after the other templates into a
+generated module (:mod:`.contact_codegen`) when no friction-law kind has a rigid
+stick mode (frictionless contacts, Jenkins, Iwan ...). It redefines the functions
+of the stick solver and of the friction complementarity problem with what they
+reduce to when no contact can stick rigidly: the stick set is always empty and
+every event is settled by the guard transitions alone. The kernel's results are
+the same; what is saved is compiling a solver that could never run (about a
+quarter of the cold compile).
 """
 
-from blademodel.numeric.contract import H_NC
+from blademodel.numeric.contract import H_NC, NONNEG, W_NS, W_NULL, WC_AC, WC_U
 
 
 def factor_stick(cm, I, R, WI, WF):
     """No contact sticks rigidly: the stick set is empty."""
-    WI[0] = 0
-    WI[1] = -1
+    WI[W_NS] = 0
+    WI[W_NULL] = -1
 
 
-def solve_stick(ns, env, Lf, Dd, b, x):
+def null_pivot_active(I, WI):
+    """No stick set, no null pivot."""
+    return False
+
+
+def stick_rates_known(I, WI):
+    """No stick forces."""
+    return False
+
+
+def solve_stick(I, WI, WF, b, x):
     """Never called with a non-empty stick set."""
+    return
+
+
+def stick_solution(F, b, x, I, R, WI, WF):
+    """Never called (no stick set)."""
     return
 
 
@@ -40,11 +55,12 @@ def project_onto_stick(y, I, R, WI, WF):
 
 
 def rigid_problem(cm, I, WI):
-    """No rigid contact: no friction problem (``U`` cleared)."""
+    """No rigid contact: no friction problem (``U`` cleared on the active set)."""
     nc = I[H_NC]
-    U = wvec(WI, nc, 2)  # noqa: F821 (the template's view, defined before this file)
-    for j in range(nc):
-        U[j] = 0
+    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821 (the templates' helpers, defined before this file)
+    U, ac = wvec(WI, nc, WC_U), wvec(WI, nc, WC_AC)  # noqa: F821
+    for jj in range(nca):
+        U[jj if full else ac[jj] & NONNEG] = 0
     return False
 
 

@@ -68,9 +68,48 @@ R_INVM, R_KV, R_CV, R_FS, R_FC, R_OM, R_GN, R_GR, R_GAP, R_K, R_P, R_W, R_RK = r
 #: (opens at ``N = 0``), NK_LOAD ``N = N0`` (never opens); and its values (``R``): ``c``, ``N0``.
 O_CNK, R_CC, R_N0 = 51, 52, 53
 NK_SPRING, NK_DAMPED, NK_LOAD = 0, 1, 2
-H_SIZE = 54    #: header length
-#: Rows of the kernel's stage buffer ``SC`` before the extra stages of a tableau method.
-SC_ROWS = 9
+#: Locality (``I``): the forcing entries of each coordinate (CSR ``Fp`` over ``fi``, which is sorted by
+#: coordinate), the contacts touching each coordinate (CSR ``Dp``, ``Di``), the coordinates coupled to
+#: each by a spring or damper (CSR ``Ap``, ``Ai``: the symmetric sparsity of ``K`` and ``C``); and (``WF``)
+#: the energy accumulators' increments of a cluster's first sub-step.
+O_FP, O_DP, O_DI, O_AP, O_AI, F_ACC = 54, 55, 56, 57, 58, 59
+H_SIZE = 60    #: header length
+#: Rows of the kernel's stage buffer ``SC`` before the extra stages of a tableau method
+#: (row ``SC_Y0``: the state at the start of a step whose events are being handled).
+SC_ROWS = 10
+SC_Y0 = 9
+#: Rows of the guard buffer ``GS`` (rows 9 and 10 keep the guards and rates at the start of a step
+#: whose events are being handled).
+GS_ROWS = 11
+
+# ---- the per-contact kernel's integer work array ``WI`` -----------------------------------
+# A header, then per-contact arrays (``nc`` each), per-coordinate arrays (``n`` each) and the
+# active state rows (``n_state``); the template's views ``wvec``, ``wdof`` and ``wrow`` take them.
+W_NS = 0       #: sticking rigid contacts, all clusters
+W_NULL = 1     #: the contact with the stick factor's zero pivot (a closed ring that sticks), or -1
+W_FULL = 2     #: 1: the active set is the whole model; 0: the cluster in ``WC_AC``, ``WD_AD``, the rows
+W_ND = 3       #: active coordinates (a cluster's)
+W_NCA = 4      #: active contacts (a cluster's)
+W_NSA = 5      #: active state rows (a cluster's)
+W_STAMP = 6    #: the last cluster's stamp (``WC_MARK``, ``WD_MARK``)
+W_NB = 7       #: contacts on the boundary of this step's clusters (``WC_BL``)
+W_NEV = 8      #: events handled in the current step (all clusters)
+W_HEAD = 9     #: header length
+#: Per-contact arrays: sticking rigid contact (0/1), first column of its row of the stick factor's
+#: envelope, contacts of the friction problem, modes before an event, modes before the friction
+#: problem, the log row of its transition in the current event, the active contacts (a cluster's,
+#: ascending), seeds of the step's clusters, cluster stamp (boundary: minus the stamp), modes at the
+#: step's start, boundary contacts.
+WC_STK, WC_ENV, WC_U, WC_CM0, WC_BEFORE, WC_FIRED, WC_AC, WC_SEED, WC_MARK, WC_CMSTEP, WC_BL = range(11)
+WC_COUNT = 11
+#: Per-coordinate arrays: the active coordinates (a cluster's, in the order found), cluster stamp.
+WD_AD, WD_MARK = 0, 1
+WD_COUNT = 2
+#: Numba fixes up a negative index (``a[-1]``) on every array access whose index it cannot prove
+#: non-negative, such as one read from an index table; the kernels mask such an index's sign bit
+#: (``i & NONNEG``: a no-op on a valid index) so that the compiler sees it is not negative. On the
+#: per-contact kernel's hot loops this saved about a quarter of the time.
+NONNEG = 0x7FFFFFFFFFFFFFFF
 #: Frequency groups and law states the work buffer holds.
 MAX_GROUPS = 8
 MAX_LAW_STATES = 64

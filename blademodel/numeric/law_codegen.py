@@ -69,6 +69,9 @@ class LawCode:
         The law's parameter field names, in ``LP`` column order.
     rigid : tuple of int or None
         ``(stick, slip+, slip-)`` mode indices if the law has a rigid stick mode.
+    open_rates : bool
+        The law's states move while the contact is open (``open_rates``): the contact
+        then couples its coordinates even when open.
     """
 
     source: str
@@ -81,6 +84,7 @@ class LawCode:
     param_fields: list
     state_names: list
     rigid: tuple | None
+    open_rates: bool = False
 
 
 def _context(law: FrictionLaw):
@@ -224,9 +228,12 @@ def law_code(law: FrictionLaw, K: int) -> LawCode:
     # rates
     L.append(f"def law{K}_rates(mode, N, Nd, v, f, y, so, R, I, j, out, oo):")
     body = []
+    open_moves = False
     for m, mode in enumerate(modes):
         r = law.open_rates(ctx) if m == 0 else law.rates(mode, ctx)
         exprs = [sp.sympify(r.get(st, 0)) for st in law.states]
+        if m == 0:
+            open_moves = any(e != 0 for e in exprs)
         if not exprs:
             continue
         body.append(branch(m, not body))
@@ -309,4 +316,4 @@ def law_code(law: FrictionLaw, K: int) -> LawCode:
     L.append("")
     return LawCode(source="\n".join(L), modes=modes, stick=stick, guard_names=guard_names, guard_dirs=guard_dirs,
                    n_states=len(states), n_params=len(fields), param_fields=fields, state_names=list(law.states),
-                   rigid=rigid)
+                   rigid=rigid, open_rates=open_moves)

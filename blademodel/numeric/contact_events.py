@@ -1,0 +1,182 @@
+"""The per-contact kernel's events: transitions, the friction complementarity problem, the event log.
+
+A *template* (see :mod:`.contact_loop`). Everything here acts on the active set:
+an event of one cluster changes the modes, states and stick factor of that
+cluster only.
+"""
+
+import math  # noqa: F401
+
+from blademodel.numeric.contract import (NONNEG, C_EVENTS, C_FRICTION_PIVOTS, C_LOGGED, F_F, F_FR, F_N, F_ND, F_V, F_YEV,
+                                         F_Z, H_N, H_NC, MAX_LAW_STATES, O_CIDX, O_CLAW, R_GR, R_INVM, R_W,
+                                         WC_AC, WC_BEFORE, WC_CM0, WC_FIRED, WC_U)
+
+#: Relative tolerance on the sign of a slipping contact's acceleration in the friction problem.
+SLIP_SIGN_TOL = 1e-9
+
+
+def apply_transition(t, y, cm, j, gi, I, R, WI, WF):
+    """Fire guard ``gi`` of contact ``j`` at ``(t, y)``; returns the new mode."""
+    contact_forces(t, y, cm, I, R, WI, WF)  # noqa: F821
+    K = I[I[O_CLAW] + j]
+    return law_transition(K, cm[j], gi, WF[I[F_N] + j], WF[I[F_ND] + j], WF[I[F_V] + j],  # noqa: F821
+                          WF[I[F_FR] + j], y, law_offset(I, j), R, I, j,  # noqa: F821
+                          vec(WF, I, F_Z, MAX_LAW_STATES))  # noqa: F821
+
+
+def resolve_friction(t, y, cm, I, R, WI, WF, counters, max_pivots):
+    """Modes of the contacts in ``U`` from the friction complementarity problem.
+
+    With the normal loads fixed, each contact of ``U`` either sticks (zero relative
+    tangential acceleration, ``|f| <= mu N``) or slips (``f = +-mu N`` with the
+    relative acceleration along the slip). The stick forces of the sticking set
+    solve ``W_SS f = b``; a least-index principal pivoting (Murty) changes one
+    violated contact at a time until none is violated: the unique solution of the
+    strictly convex box QP ``min 1/2 f^T W f - b^T f, |f| <= mu N``. Velocities are
+    projected onto the stick constraints of contacts that were not sticking
+    before the event (``cm0``), from the state at the event (``yev``).
+
+    Returns True if resolved, False at the pivot cap.
+    """
+    n, nc = I[H_N], I[H_NC]
+    full, _, nca, _ = active_counts(WI, n, nc, 0)  # noqa: F821
+    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    claw, cidx = vec(I, I, O_CLAW, nc), vec(I, I, O_CIDX, 4 * nc)  # noqa: F821
+    invm, cgr, W = vec(R, I, R_INVM, n), vec(R, I, R_GR, 4 * nc), vec(R, I, R_W, nc * nc)  # noqa: F821
+    U, cm0 = wvec(WI, nc, WC_U), wvec(WI, nc, WC_CM0)  # noqa: F821
+    yev = vec(WF, I, F_YEV, y.shape[0])  # noqa: F821
+    F, cf = vec(WF, I, F_F, n), vec(WF, I, F_FR, nc)  # noqa: F821
+    copy_rows(WI, nc, n, yev, y)  # noqa: F821
+    for it in range(max_pivots):
+        copy_rows(WI, nc, n, y, yev)  # noqa: F821
+        factor_stick(cm, I, R, WI, WF)  # noqa: F821
+        newly = False
+        for jj in range(nca):
+            j = jj if full else ac[jj] & NONNEG
+            K = claw[j]
+            if IS_STICK[K, cm[j]] and not IS_STICK[K, cm0[j]]:  # noqa: F821
+                newly = True
+        if newly:
+            project_onto_stick(y, I, R, WI, WF)  # noqa: F821
+        contact_forces(t, y, cm, I, R, WI, WF)  # noqa: F821
+        flip = -1
+        for jj in range(nca):
+            j = jj if full else ac[jj] & NONNEG
+            if not U[j]:
+                continue
+            K = claw[j]
+            m = cm[j]
+            b = slip_bound(j, y, I, R, WF)  # noqa: F821
+            if m == RIGID[K, 0]:  # noqa: F821
+                if b - abs(cf[j]) < 0.0:
+                    flip = j
+                    cm[j] = RIGID[K, 1] if cf[j] > 0.0 else RIGID[K, 2]  # noqa: F821
+                    break
+            else:
+                s = 1.0 if m == RIGID[K, 1] else -1.0  # noqa: F821
+                a = 0.0
+                for k in range(4):
+                    i = cidx[4 * j + k]
+                    if i >= 0:
+                        a += cgr[4 * j + k] * invm[i] * F[i]
+                if s * a < -SLIP_SIGN_TOL * W[j * nc + j] * b:
+                    flip = j
+                    cm[j] = RIGID[K, 0]  # noqa: F821
+                    break
+        if flip < 0:
+            return True
+        counters[C_FRICTION_PIVOTS] += 1
+    return False
+
+
+def rigid_problem(cm, I, WI):
+    """Mark in ``U`` the active closed rigid contacts whose mode an event leaves open; True if any.
+
+    Those are the contacts sticking before the event (``cm0``) or sent to stick by
+    it: a slipping contact whose velocity has not reached zero keeps its slip.
+    """
+    nc = I[H_NC]
+    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
+    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    claw, U, cm0 = vec(I, I, O_CLAW, nc), wvec(WI, nc, WC_U), wvec(WI, nc, WC_CM0)  # noqa: F821
+    anyu = False
+    for jj in range(nca):
+        j = jj if full else ac[jj] & NONNEG
+        K = claw[j]
+        u = False
+        if RIGID[K, 0] >= 0 and cm[j] != 0:  # noqa: F821
+            u = IS_STICK[K, cm[j]] != 0 or IS_STICK[K, cm0[j]] != 0  # noqa: F821
+        U[j] = 1 if u else 0
+        if u:
+            anyu = True
+    return anyu
+
+
+def log_event(t, j, gi, old, new, log_t, log_c, log_g, log_from, log_to, counters, recording, fired):
+    """Log and count a mode change of contact ``j``; ``fired[j]`` remembers it for this event."""
+    k = counters[C_LOGGED]
+    if recording:
+        if k < log_t.shape[0]:
+            log_t[k] = t
+            log_c[k] = j
+            log_g[k] = gi
+            log_from[k] = old
+            log_to[k] = new
+        counters[C_LOGGED] += 1
+    fired[j] = k + 1 if recording else -1
+    counters[C_EVENTS] += 1
+
+
+def settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log_g, log_from, log_to,
+                 recording):
+    """After guard transitions: the friction problem of the active rigid contacts, logged; False if unresolved."""
+    nc = I[H_NC]
+    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
+    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    cm0, before, fired = wvec(WI, nc, WC_CM0), wvec(WI, nc, WC_BEFORE), wvec(WI, nc, WC_FIRED)  # noqa: F821
+    ok = True
+    if rigid_problem(cm, I, WI):
+        for jj in range(nca):
+            j = jj if full else ac[jj] & NONNEG
+            before[j] = cm[j]
+        ok = resolve_friction(t, y, cm, I, R, WI, WF, counters, max_pivots)
+        for jj in range(nca):
+            j = jj if full else ac[jj] & NONNEG
+            if cm[j] == before[j]:
+                continue
+            if fired[j] != 0:
+                # the guard of this very contact fired in this event: one event, to the settled mode
+                k = fired[j] - 1
+                if k >= 0 and k < log_to.shape[0]:
+                    log_to[k] = cm[j]
+            else:
+                log_event(t, j, runtime(-1), before[j], cm[j], log_t, log_c, log_g, log_from, log_to,  # noqa: F821
+                          counters, recording, fired)
+    factor_stick(cm, I, R, WI, WF)  # noqa: F821
+    for jj in range(nca):
+        j = jj if full else ac[jj] & NONNEG
+        cm0[j] = cm[j]
+        fired[j] = 0
+    return ok
+
+
+def initial_modes(t, y, cm, I, R, WI, WF, G, counters, max_pivots, e, ei):
+    """Close every contact whose normal guard is ``>= 0`` (penetration ``>= 0`` for a contact spring)
+    through its law's entry rule; resolve friction (the whole model).
+
+    ``G`` is guard scratch ``(nc, GMAX)``; ``e`` and ``ei`` are empty float and int
+    arrays (no event log).
+    """
+    set_full(WI)  # noqa: F821
+    nc = I[H_NC]
+    claw, cm0 = vec(I, I, O_CLAW, nc), wvec(WI, nc, WC_CM0)  # noqa: F821
+    for j in range(nc):
+        cm[j] = 0
+        cm0[j] = 0
+    factor_stick(cm, I, R, WI, WF)  # noqa: F821
+    eval_guards(t, y, cm, I, R, WI, WF, G)  # noqa: F821
+    for j in range(nc):
+        if G[j, 0] >= 0.0 and NG[claw[j], 0] > 0:  # noqa: F821
+            cm[j] = apply_transition(t, y, cm, j, runtime(0), I, R, WI, WF)  # noqa: F821
+            factor_stick(cm, I, R, WI, WF)  # noqa: F821
+    return settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, e, ei, ei, ei, ei, runtime(False))  # noqa: F821

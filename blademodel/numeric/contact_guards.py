@@ -1,0 +1,280 @@
+"""The per-contact kernel's guards: values, rates, crossings and grazing candidates, on the active set.
+
+A *template* (see :mod:`.contact_loop`). Guard 0 of every contact is its normal
+law's (``normal_guard``), the friction law's guards follow (``law_guards``);
+``G[j, gi]`` holds contact ``j``'s guard ``gi``, ``D[j, gi]`` its rate (NaN where
+unknown). The tables ``NG``, ``GDIR`` describe each law kind's guards.
+"""
+
+import math  # noqa: F401
+
+from blademodel.numeric.contract import (NONNEG, F_DL, F_DR, F_FR, F_N, F_ND, F_V, F_XD, H_N, H_NC, NK_DAMPED, NK_LOAD,
+                                         NK_SPRING, O_CIDX, O_CLAW, O_CNK, R_CC, R_GN, R_GR, R_K, R_N0, WC_AC,
+                                         WC_FIRED, WC_STK)
+
+
+def normal_guard(j, mode, nk, dl, dd, N, ck, cc, cn0):
+    """The guard of contact ``j``'s normal law: the penetration (spring), the normal force (damped,
+    closed), ``k delta + c min(ddelta/dt, 0)`` (damped, open) or the constant load."""
+    if nk == NK_SPRING:
+        return dl
+    if nk == NK_LOAD:
+        return cn0[j]
+    if mode != 0:
+        return N
+    return ck[j] * dl + cc[j] * min(dd, 0.0)
+
+
+def normal_guard_rate(j, mode, nk, dd, Nd, dy, n, cidx, cgn, ck, cc):
+    """Time derivative of ``normal_guard`` (``Nd``: the closed contact's ``dN/dt``)."""
+    if nk == NK_SPRING:
+        return dd
+    if nk == NK_LOAD:
+        return 0.0
+    if mode != 0:
+        return Nd
+    r = ck[j] * dd
+    if dd < 0.0:
+        a = 0.0
+        for k in range(4):
+            i = cidx[4 * j + k]
+            if i >= 0:
+                a += cgn[4 * j + k] * dy[n + i]
+        r += cc[j] * a
+    return r
+
+
+def eval_guards(t, y, cm, I, R, WI, WF, G):
+    """The active contacts' guards into ``G[j, :]``: 0 the normal law's (``normal_guard``), then the law's."""
+    contact_forces(t, y, cm, I, R, WI, WF)  # noqa: F821
+    guards_of_forces(y, cm, I, R, WI, WF, G)
+
+
+def guards_of_forces(y, cm, I, R, WI, WF, G):
+    """The active contacts' guards from the forces of the last ``contact_forces``."""
+    nc = I[H_NC]
+    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
+    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    claw = vec(I, I, O_CLAW, nc)  # noqa: F821
+    cN, cNd, cv, cf, cdl = (vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc),  # noqa: F821
+                            vec(WF, I, F_FR, nc), vec(WF, I, F_DL, nc))  # noqa: F821
+    cnk, cc, cn0, ck = vec(I, I, O_CNK, nc), vec(R, I, R_CC, nc), vec(R, I, R_N0, nc), vec(R, I, R_K, nc)  # noqa: F821
+    cdr = vec(WF, I, F_DR, nc)  # noqa: F821
+    for jj in range(nca):
+        j = jj if full else ac[jj] & NONNEG
+        G[j, 0] = normal_guard(j, cm[j], cnk[j], cdl[j], cdr[j], cN[j], ck, cc, cn0)
+        law_guards(claw[j], cm[j], cN[j], cNd[j], cv[j], cf[j], y, law_offset(I, j), R, I, j, G)  # noqa: F821
+
+
+def contact_rates(j, dy, n, cidx, cgn, cgr, ck):
+    """``(dNd/dt, dv/dt)`` of contact ``j``: its normal force's second derivative and slip acceleration."""
+    add = 0.0
+    vd = 0.0
+    for k in range(4):
+        i = cidx[4 * j + k]
+        if i >= 0:
+            add += cgn[4 * j + k] * dy[n + i]
+            vd += cgr[4 * j + k] * dy[n + i]
+    return ck[j] * add, vd
+
+
+def guard_rates(y, dy, cm, I, R, WI, WF, D, with_stick):
+    """Time derivatives of the active contacts' guards at ``y`` (``dy = dy/dt`` there; the forces of its last
+    ``contact_forces``).
+
+    The penetration's rate is known in every mode; a law guard's where the law's
+    generated ``law_guard_rates`` knows it; a guard on a rigid stick force's only
+    ``with_stick`` (:func:`stick_force_rates`, one more pass over the forces and a stick solve)
+    and not in a closed ring of sticking contacts (whose forces are not determined by
+    the motion); NaN elsewhere.
+    """
+    n, nc = I[H_N], I[H_NC]
+    full, _, nca, _ = active_counts(WI, n, nc, 0)  # noqa: F821
+    ac, stk = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_STK)  # noqa: F821
+    claw, cidx = vec(I, I, O_CLAW, nc), vec(I, I, O_CIDX, 4 * nc)  # noqa: F821
+    cgn, cgr, ck = vec(R, I, R_GN, 4 * nc), vec(R, I, R_GR, 4 * nc), vec(R, I, R_K, nc)  # noqa: F821
+    cN, cNd, cv, cf = vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc), vec(WF, I, F_FR, nc)  # noqa: F821
+    cdr, xd = vec(WF, I, F_DR, nc), vec(WF, I, F_XD, nc)  # noqa: F821
+    stick_known = with_stick and stick_rates_known(I, WI)  # noqa: F821
+    if stick_known:
+        stick_force_rates(y, dy, cm, I, R, WI, WF)  # noqa: F821
+    cnk, cc = vec(I, I, O_CNK, nc), vec(R, I, R_CC, nc)  # noqa: F821
+    for jj in range(nca):
+        j = jj if full else ac[jj] & NONNEG
+        D[j, 0] = normal_guard_rate(j, cm[j], cnk[j], cdr[j], cNd[j], dy, n, cidx, cgn, ck, cc)
+        for gi in range(1, D.shape[1]):
+            D[j, gi] = math.nan
+        if cm[j] == 0:
+            continue
+        Ndd, vd = contact_rates(j, dy, n, cidx, cgn, cgr, ck)
+        if cnk[j] == NK_DAMPED:
+            Ndd = math.nan   # k d2delta/dt2 + c d3delta/dt3: the jerk is not known
+        fd = xd[j] if stick_known and stk[j] else math.nan
+        law_guard_rates(claw[j], cm[j], cN[j], cNd[j], Ndd, cv[j], vd, cf[j], fd, y,  # noqa: F821
+                        law_offset(I, j), R, I, j, dy, D)  # noqa: F821
+
+
+def copy_guards(I, WI, G, Gm, D, Dm):
+    """``G, D = Gm, Dm`` (guards and their rates) on the active contacts."""
+    nc = I[H_NC]
+    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
+    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    for jj in range(nca):
+        j = jj if full else ac[jj] & NONNEG
+        for gi in range(G.shape[1]):
+            G[j, gi] = Gm[j, gi]
+            D[j, gi] = Dm[j, gi]
+
+
+# ---- crossings ------------------------------------------------------------------------------
+def crossed(g0, g1, direction):
+    """Whether a guard went from ``g0`` to ``g1`` through zero in ``direction`` (see ``loop.crossed``)."""
+    if direction < 0:
+        return g0 >= 0.0 and g1 < 0.0
+    if direction > 0:
+        return g0 <= 0.0 and g1 > 0.0
+    return (g0 > 0.0 and g1 <= 0.0) or (g0 < 0.0 and g1 >= 0.0)
+
+
+def contact_crossing(j, m, K, G0, G1):
+    """The first guard of contact ``j`` (mode ``m``, law kind ``K``) that crossed from ``G0`` to ``G1``, or -1."""
+    for gi in range(NG[K, m]):  # noqa: F821
+        if crossed(G0[j, gi], G1[j, gi], GDIR[K, m, gi]):  # noqa: F821
+            return gi
+    return -1
+
+
+def first_crossing(cm, I, WI, G0, G1):
+    """``j * GMAX + gi`` of the first active guard that crossed (contacts in order), or -1.
+
+    Contacts whose transition fired in the current event are passed over: their law
+    has settled them, and their new mode's guards compared across the bracket mean
+    nothing (outside an event no contact is marked).
+    """
+    nc = I[H_NC]
+    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
+    ac, fired = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_FIRED)  # noqa: F821
+    claw = vec(I, I, O_CLAW, nc)  # noqa: F821
+    for jj in range(nca):
+        j = jj if full else ac[jj] & NONNEG
+        if fired[j] != 0:
+            continue
+        gi = contact_crossing(j, cm[j], claw[j], G0, G1)
+        if gi >= 0:
+            return j * GMAX + gi  # noqa: F821
+    return -1
+
+
+def earliest_crossing(cm, I, WI, Glo, G1, Dlo, D1, lo, hi, dt):
+    """``j * GMAX + gi`` of the crossed active guard with the earliest predicted root in ``(lo, hi)``, and that
+    root."""
+    nc = I[H_NC]
+    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
+    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    claw = vec(I, I, O_CLAW, nc)  # noqa: F821
+    best = -1
+    xbest = hi
+    for jj in range(nca):
+        j = jj if full else ac[jj] & NONNEG
+        K = claw[j]
+        m = cm[j]
+        for gi in range(NG[K, m]):  # noqa: F821
+            if crossed(Glo[j, gi], G1[j, gi], GDIR[K, m, gi]):  # noqa: F821
+                x = predicted_root(Glo[j, gi], G1[j, gi], Dlo[j, gi], D1[j, gi], lo, hi, dt)  # noqa: F821
+                if best < 0 or x < xbest:
+                    best = j * GMAX + gi  # noqa: F821
+                    xbest = x
+    return best, xbest
+
+
+def first_near_crossing(cm, I, WI, Gs, G1, span, tol):
+    """``j * GMAX + gi`` of the first active guard of a contact not yet fired that will cross within ``tol``.
+
+    ``Gs`` and ``G1`` are the guards at the sub-step start and at the event, ``span``
+    apart in time. A guard moving toward its crossing whose root, extrapolated
+    linearly, lies within the event tolerance ``tol`` after the event is
+    simultaneous with it (the two roots are not told apart by the location), so it
+    fires now; otherwise roots equal but for round-off, as in a symmetric ring, could
+    split into two events in either order.
+    """
+    if span <= 0.0:
+        return -1
+    nc = I[H_NC]
+    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
+    ac, fired = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_FIRED)  # noqa: F821
+    claw = vec(I, I, O_CLAW, nc)  # noqa: F821
+    for jj in range(nca):
+        j = jj if full else ac[jj] & NONNEG
+        if fired[j] != 0:
+            continue
+        K = claw[j]
+        m = cm[j]
+        for gi in range(NG[K, m]):  # noqa: F821
+            d = GDIR[K, m, gi]  # noqa: F821
+            gs = Gs[j, gi]
+            ge = G1[j, gi]
+            toward = (d <= 0 and 0.0 <= ge < gs) or (d >= 0 and gs < ge <= 0.0)
+            if toward and abs(ge) * span <= abs(ge - gs) * tol:
+                return j * GMAX + gi  # noqa: F821
+    return -1
+
+
+# ---- grazing --------------------------------------------------------------------------------
+def hermite_extremum(g0, g1, d0, d1):
+    """Where the Hermite interpolant's slope, ``d0`` and ``d1`` of opposite signs at the ends, is zero."""
+    lo = 0.0
+    hi = 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        d = hermite(mid, g0, g1, d0, d1)[1]  # noqa: F821
+        if (d > 0.0) == (d0 > 0.0):
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+def contact_grazing(j, m, K, G0, G1, D0, D1, dt, width):
+    """The earliest fraction of a step at which a guard of contact ``j`` that did not cross may have crossed and
+    come back, or -1.
+
+    A guard with known rates that moves toward its crossing at the step's start and
+    away from it at the end, both ends on the side before the crossing, has an
+    extremum inside the step; if the cubic Hermite interpolant of its values and
+    rates puts that extremum past zero, the guard crossed and returned within the
+    step (a brief contact, a grazing touch). An extremum within ``width`` (the event
+    tolerance) of the start is the turn of an event just handled there, not a new
+    one: it is passed over.
+    """
+    best = -1.0
+    for gi in range(NG[K, m]):  # noqa: F821
+        d0 = D0[j, gi] * dt
+        d1 = D1[j, gi] * dt
+        if not (math.isfinite(d0) and math.isfinite(d1)):
+            continue
+        g0 = G0[j, gi]
+        g1 = G1[j, gi]
+        dr = GDIR[K, m, gi]  # noqa: F821
+        rising = dr >= 0 and g0 < 0.0 and g1 < 0.0 and d0 > 0.0 and d1 < 0.0
+        falling = dr <= 0 and g0 > 0.0 and g1 > 0.0 and d0 < 0.0 and d1 > 0.0
+        if rising or falling:
+            s = hermite_extremum(g0, g1, d0, d1)
+            v = hermite(s, g0, g1, d0, d1)[0]  # noqa: F821
+            if s > width and ((rising and v > 0.0) or (falling and v < 0.0)) and (best < 0.0 or s < best):
+                best = s
+    return best
+
+
+def grazing_candidate(cm, I, WI, G0, G1, D0, D1, dt, width):
+    """The earliest grazing fraction (``contact_grazing``) over the active contacts, or -1."""
+    nc = I[H_NC]
+    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
+    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    claw = vec(I, I, O_CLAW, nc)  # noqa: F821
+    best = -1.0
+    for jj in range(nca):
+        j = jj if full else ac[jj] & NONNEG
+        s = contact_grazing(j, cm[j], claw[j], G0, G1, D0, D1, dt, width)
+        if s > 0.0 and (best < 0.0 or s < best):
+            best = s
+    return best
