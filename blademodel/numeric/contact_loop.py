@@ -183,6 +183,28 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
     return STATUS_OK, t
 
 
+def whole_step(t, t_end, y, cm, I, R, WI, WF, SC, GS, g0_valid, width, detect_grazing, counters):
+    """The whole model's step from ``(t, y)`` to ``t_end`` into ``SC[5]``, its rate into ``SC[8]``, the guards and
+    their rates at both ends; returns the number of seeds (``mark_seeds``).
+
+    ``SC[0]`` holds ``dy/dt`` at ``(t, y)`` and ``GS[0]``, ``GS[4]`` the guards and rates
+    there if ``g0_valid`` (the end of the last step), else they are evaluated first.
+    (A function of its own: inside ``integrate`` the compiler inlined less of it,
+    and a step cost a third more.)
+    """
+    y1, knext = SC[5], SC[8]
+    G0, G1, D0, D1 = GS[0], GS[1], GS[4], GS[5]
+    if not g0_valid:
+        rhs_guards(t, y, cm, I, R, WI, WF, SC[0], G0)  # noqa: F821
+        guard_rates(y, SC[0], cm, I, R, WI, WF, D0, True)  # noqa: F821
+        counters[C_RHS] += 1
+    spent = rk_step(t, y, t_end - t, cm, I, R, WI, WF, SC, y1, True)  # noqa: F821
+    rhs_guards(t_end, y1, cm, I, R, WI, WF, knext, G1)  # noqa: F821
+    guard_rates(y1, knext, cm, I, R, WI, WF, D1, False)  # noqa: F821
+    counters[C_RHS] += spent + 1
+    return mark_seeds(cm, I, WI, G0, G1, D0, D1, t_end - t, width, detect_grazing)  # noqa: F821
+
+
 def step_clusters(t0, t_end, y, cm, I, R, WI, WF, SC, GS, tol_t, max_events, max_pivots, detect_grazing, predicted,
                   log_t, log_c, log_g, log_from, log_to, counters, recording):
     """Step the clusters of the step's seeds through their events; the rest keeps the whole step.
@@ -326,17 +348,9 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
             t_end = period * per + (js + 1) * h
             tol_t = event_tol * h
             dt = t_end - t
-            if not g0_valid:
-                rhs_guards(t, y, cm, I, R, WI, WF, SC[0], G0)  # noqa: F821
-                guard_rates(y, SC[0], cm, I, R, WI, WF, D0, True)  # noqa: F821
-                counters[C_RHS] += 1
-            # SC[0] holds dy/dt at (t, y): from the line above or the end of the last step
-            spent = rk_step(t, y, dt, cm, I, R, WI, WF, SC, y1, True)  # noqa: F821
-            rhs_guards(t_end, y1, cm, I, R, WI, WF, knext, G1)  # noqa: F821
-            guard_rates(y1, knext, cm, I, R, WI, WF, D1, False)  # noqa: F821
-            counters[C_RHS] += spent + 1
+            seeds = whole_step(t, t_end, y, cm, I, R, WI, WF, SC, GS, g0_valid, tol_t / dt, detect_grazing, counters)
             g0_valid = True
-            if mark_seeds(cm, I, WI, G0, G1, D0, D1, dt, tol_t / dt, detect_grazing) > 0:  # noqa: F821
+            if seeds > 0:
                 status, te = step_clusters(t, t_end, y, cm, I, R, WI, WF, SC, GS, tol_t, max_events, max_pivots,
                                            detect_grazing, predicted, log_t, log_c, log_g, log_from, log_to,
                                            counters, recording)
