@@ -39,6 +39,23 @@ def mark_seeds(cm, I, WI, G0, G1, D0, D1, dt, width, grazing):
     return count
 
 
+def next_cluster(js, local, cm, I, WI, n_state, first_stamp):
+    """Make the cluster of the next seed after contact ``js`` not yet in a cluster of this pass the active set;
+    return that seed, or -1 when none is left. Without ``local`` the whole model is the one cluster."""
+    if not local:
+        if js >= 0:
+            return -1
+        set_full(WI)  # noqa: F821
+        return 0
+    nc = I[H_NC]
+    seed, cmark = wvec(WI, nc, WC_SEED), wvec(WI, nc, WC_MARK)  # noqa: F821
+    for j in range(js + 1, nc):
+        if seed[j] != 0 and cmark[j] < first_stamp:
+            build_cluster(j, cm, I, WI, n_state, first_stamp)
+            return j
+    return -1
+
+
 def push_contact(j, cidx, dmark, ad, nd, stamp):
     """Append contact ``j``'s coordinates not yet in the cluster to the search list ``ad``; the new length."""
     for k in range(4):
@@ -64,7 +81,7 @@ def build_cluster(js, cm, I, WI, n_state, first_stamp):
     Ap, Ai = vec(I, I, O_AP, n + 1), I[I[O_AI]:]  # noqa: F821
     Dp, Di = vec(I, I, O_DP, n + 1), I[I[O_DI]:]  # noqa: F821
     cidx, claw = vec(I, I, O_CIDX, 4 * nc), vec(I, I, O_CLAW, nc)  # noqa: F821
-    nd = push_contact(js, cidx, dmark, ad, 0, stamp)
+    nd = push_contact(js, cidx, dmark, ad, runtime(0), stamp)  # noqa: F821
     q = 0
     while q < nd:
         i = ad[q]
@@ -79,7 +96,7 @@ def build_cluster(js, cm, I, WI, n_state, first_stamp):
             j = Di[e]
             if cm[j] != 0 or OPEN_RATES[claw[j]] != 0 or seed[j] != 0:  # noqa: F821
                 nd = push_contact(j, cidx, dmark, ad, nd, stamp)
-    nca = 0
+    nca = runtime(0)  # noqa: F821
     nb = WI[W_NB]
     for qq in range(nd):
         i = ad[qq]
@@ -103,7 +120,7 @@ def build_cluster(js, cm, I, WI, n_state, first_stamp):
                 cmark[j] = -stamp
     WI[W_NB] = nb
     sort_ascending(ac, nca, cmark, stamp, nc)
-    rows = wrow(WI, nc, n, n_state)  # noqa: F821
+    rows = wrow(WI, nc, n, n_state, 0)  # noqa: F821
     nsa = 0
     for qq in range(nd):
         i = ad[qq]
@@ -165,8 +182,8 @@ def boundary_crossing(y, dy, cm, I, R, WI, G0, G1, D0, D1, dt, width, grazing):
             if i >= 0:
                 dl += cgn[4 * j + k] * y[i]
                 dd += cgn[4 * j + k] * y[n + i]
-        G1[j, 0] = normal_guard(j, 0, cnk[j], dl, dd, 0.0, ck, cc, cn0)  # noqa: F821
-        D1[j, 0] = normal_guard_rate(j, 0, cnk[j], dd, 0.0, dy, n, cidx, cgn, ck, cc)  # noqa: F821
+        G1[j, 0] = normal_guard(j, cm[j], cnk[j], dl, dd, 0.0, ck, cc, cn0)  # noqa: F821
+        D1[j, 0] = normal_guard_rate(j, cm[j], cnk[j], dd, 0.0, dy, n, cidx, cgn, ck, cc)  # noqa: F821
         K = claw[j]
         if contact_crossing(j, cm[j], K, G0, G1) >= 0:  # noqa: F821
             return j

@@ -11,12 +11,12 @@ of contacts or blades.
 from __future__ import annotations
 
 import inspect
-import re
 
 from ..components.friction.base import FrictionLaw
 from . import (bracket, contact_clusters, contact_events, contact_flow, contact_guards, contact_locate, contact_loop,
                contact_rigid_stubs, contact_stick)
 from .law_codegen import law_code
+from .view_rewrite import direct_views
 
 #: The kernel's templates, in the order they are pasted (:mod:`.contact_loop` describes them);
 #: ``contact_rigid_stubs`` follows when no law kind has a rigid stick mode.
@@ -57,39 +57,6 @@ _DISPATCH = {
     "law_energy": ("y, so, R, I, j", "return {call}", "return 0.0"),
     "law_dissipation": ("mode, N, Nd, v, f, y, so, R, I, j", "return {call}", "return 0.0"),
 }
-
-
-_VIEW_CALL = re.compile(r"(?<![\w.])(vec|wvec|wdof|wrow|law_offset)\(([^()]*)\)")
-#: The views written out (``a``, ``I``, ``key``, ... are the call's arguments, all plain names).
-_WD = "W_HEAD + WC_COUNT * ({nc})"
-_VIEW_EXPANSION = {
-    "vec": lambda a, I, key, size: f"{a}[{I}[{key}]:{I}[{key}] + {size}]",
-    "wvec": lambda WI, nc, k: f"{WI}[W_HEAD + ({k}) * ({nc}):W_HEAD + ({k} + 1) * ({nc})]",
-    "wdof": lambda WI, nc, n, k: (f"{WI}[{_WD.format(nc=nc)} + ({k}) * ({n}):"
-                                  f"{_WD.format(nc=nc)} + ({k} + 1) * ({n})]"),
-    "wrow": lambda WI, nc, n, ns: (f"{WI}[{_WD.format(nc=nc)} + WD_COUNT * ({n}):"
-                                   f"{_WD.format(nc=nc)} + WD_COUNT * ({n}) + ({ns})]"),
-    "law_offset": lambda I, j: f"(2 * {I}[H_N] + {I}[{I}[O_CSO] + {j}])",
-}
-
-
-def expand_views(source: str) -> str:
-    """``source`` with every call of a view helper written out as the slice it returns.
-
-    The helpers document the buffer layout; written out, the slices cost Numba
-    nothing to inline (``inline='always'`` types each inlined body again: 8 % of the
-    compile time in a profile). Their definitions stay in the module, unused.
-    """
-    def one(m):
-        args = [a.strip() for a in m.group(2).split(",")]
-        return _VIEW_EXPANSION[m.group(1)](*args)
-    lines = []
-    for line in source.split("\n"):
-        if line.lstrip().startswith("def "):
-            lines.append(line)
-        else:
-            lines.append(_VIEW_CALL.sub(one, line))
-    return "\n".join(lines)
 
 
 def generate_contact_kernel(laws: list[FrictionLaw]) -> tuple[str, dict]:
@@ -144,7 +111,7 @@ def generate_contact_kernel(laws: list[FrictionLaw]) -> tuple[str, dict]:
     functions: list[str] = []
     for mod in templates:
         L.append(f"# ---- {mod.__name__} ----")
-        L.append(expand_views(inspect.getsource(mod)))
+        L.append(direct_views(inspect.getsource(mod)))
         L.append("")
         functions += [f for f in template_functions(mod) if f not in functions]
     fns = [f"law{K}_{f}" for K in range(len(codes))

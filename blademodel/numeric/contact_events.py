@@ -7,7 +7,7 @@ cluster only.
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import (NONNEG, C_EVENTS, C_FRICTION_PIVOTS, C_LOGGED, F_F, F_FR, F_N, F_ND, F_V, F_YEV,
+from blademodel.numeric.contract import (WC_ALL, NONNEG, C_EVENTS, C_FRICTION_PIVOTS, C_LOGGED, F_F, F_FR, F_N, F_ND, F_V, F_YEV,
                                          F_Z, H_N, H_NC, MAX_LAW_STATES, O_CIDX, O_CLAW, R_GR, R_INVM, R_W,
                                          WC_AC, WC_BEFORE, WC_CM0, WC_FIRED, WC_U)
 
@@ -39,8 +39,8 @@ def resolve_friction(t, y, cm, I, R, WI, WF, counters, max_pivots):
     Returns True if resolved, False at the pivot cap.
     """
     n, nc = I[H_N], I[H_NC]
-    full, _, nca, _ = active_counts(WI, n, nc, 0)  # noqa: F821
-    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac = wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
     claw, cidx = vec(I, I, O_CLAW, nc), vec(I, I, O_CIDX, 4 * nc)  # noqa: F821
     invm, cgr, W = vec(R, I, R_INVM, n), vec(R, I, R_GR, 4 * nc), vec(R, I, R_W, nc * nc)  # noqa: F821
     U, cm0 = wvec(WI, nc, WC_U), wvec(WI, nc, WC_CM0)  # noqa: F821
@@ -52,7 +52,7 @@ def resolve_friction(t, y, cm, I, R, WI, WF, counters, max_pivots):
         factor_stick(cm, I, R, WI, WF)  # noqa: F821
         newly = False
         for jj in range(nca):
-            j = jj if full else ac[jj] & NONNEG
+            j = ac[jj] & NONNEG
             K = claw[j]
             if IS_STICK[K, cm[j]] and not IS_STICK[K, cm0[j]]:  # noqa: F821
                 newly = True
@@ -61,7 +61,7 @@ def resolve_friction(t, y, cm, I, R, WI, WF, counters, max_pivots):
         contact_forces(t, y, cm, I, R, WI, WF)  # noqa: F821
         flip = -1
         for jj in range(nca):
-            j = jj if full else ac[jj] & NONNEG
+            j = ac[jj] & NONNEG
             if not U[j]:
                 continue
             K = claw[j]
@@ -96,12 +96,12 @@ def rigid_problem(cm, I, WI):
     it: a slipping contact whose velocity has not reached zero keeps its slip.
     """
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac = wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
     claw, U, cm0 = vec(I, I, O_CLAW, nc), wvec(WI, nc, WC_U), wvec(WI, nc, WC_CM0)  # noqa: F821
     anyu = False
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         K = claw[j]
         u = False
         if RIGID[K, 0] >= 0 and cm[j] != 0:  # noqa: F821
@@ -131,17 +131,17 @@ def settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log
                  recording):
     """After guard transitions: the friction problem of the active rigid contacts, logged; False if unresolved."""
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac = wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
     cm0, before, fired = wvec(WI, nc, WC_CM0), wvec(WI, nc, WC_BEFORE), wvec(WI, nc, WC_FIRED)  # noqa: F821
     ok = True
     if rigid_problem(cm, I, WI):
         for jj in range(nca):
-            j = jj if full else ac[jj] & NONNEG
+            j = ac[jj] & NONNEG
             before[j] = cm[j]
         ok = resolve_friction(t, y, cm, I, R, WI, WF, counters, max_pivots)
         for jj in range(nca):
-            j = jj if full else ac[jj] & NONNEG
+            j = ac[jj] & NONNEG
             if cm[j] == before[j]:
                 continue
             if fired[j] != 0:
@@ -154,7 +154,7 @@ def settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log
                           counters, recording, fired)
     factor_stick(cm, I, R, WI, WF)  # noqa: F821
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         cm0[j] = cm[j]
         fired[j] = 0
     return ok

@@ -18,7 +18,7 @@ model: restricted, they receive the cluster's share.
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import (NONNEG, F_CG, F_DL, F_DR, F_F, F_FR, F_N, F_ND, F_SG, F_T, F_V, F_X, F_B,
+from blademodel.numeric.contract import (WD_ALL, WC_ALL, NONNEG, F_CG, F_DL, F_DR, F_F, F_FR, F_N, F_ND, F_SG, F_T, F_V, F_X, F_B,
                                          H_N, H_NC, H_NF, H_NG, H_NLAW, H_NS, NK_DAMPED, NK_LOAD, NK_SPRING,
                                          O_CI, O_CIDX, O_CLAW, O_CNK, O_CP, O_CSO, O_FG, O_FI, O_FP, O_KI, O_KP,
                                          R_CC, R_CV, R_FC, R_FS, R_GN, R_GR, R_GAP, R_INVM, R_K, R_KV, R_N0,
@@ -52,9 +52,9 @@ def wdof(WI, nc, n, k):
     return WI[o:o + n]
 
 
-def wrow(WI, nc, n, ns):
-    """The active state rows of a cluster (``ns`` = the state's length)."""
-    o = W_HEAD + WC_COUNT * nc + WD_COUNT * n
+def wrow(WI, nc, n, ns, k):
+    """State rows (``ns`` = the state's length): a cluster's (``k = 0``) or every row (``k = 1``)."""
+    o = W_HEAD + WC_COUNT * nc + WD_COUNT * n + k * ns
     return WI[o:o + ns]
 
 
@@ -68,19 +68,33 @@ def set_full(WI):
     WI[W_FULL] = 1
 
 
-def active_counts(WI, n, nc, ns):
-    """``(full, coordinates, contacts, state rows)`` of the active set."""
+def active_dofs(WI, n):
+    """``(full, count)`` of the active coordinates (``n``: the model's)."""
     if WI[W_FULL] != 0:
-        return True, n, nc, ns
-    return False, WI[W_ND], WI[W_NCA], WI[W_NSA]
+        return True, n
+    return False, WI[W_ND]
+
+
+def active_contacts(WI, nc):
+    """``(full, count)`` of the active contacts (``nc``: the model's)."""
+    if WI[W_FULL] != 0:
+        return True, nc
+    return False, WI[W_NCA]
+
+
+def active_rows(WI, ns):
+    """``(full, count)`` of the active state rows (``ns``: the state's length)."""
+    if WI[W_FULL] != 0:
+        return True, ns
+    return False, WI[W_NSA]
 
 
 def copy_rows(WI, nc, n, dst, src):
     """``dst = src`` on the active state rows."""
-    full, _, _, nsa = active_counts(WI, n, nc, dst.shape[0])
-    rows = wrow(WI, nc, n, dst.shape[0])
+    full, nsa = active_rows(WI, dst.shape[0])
+    rows = wrow(WI, nc, n, dst.shape[0], 1 if full else 0)
     for ii in range(nsa):
-        i = ii if full else rows[ii] & NONNEG
+        i = rows[ii] & NONNEG
         dst[i] = src[i]
 
 
@@ -91,8 +105,9 @@ def contact_forces(t, y, cm, I, R, WI, WF):
     Returns the input power of the forcing (for the energy accumulators).
     """
     n, nc, ng = I[H_N], I[H_NC], I[H_NG]
-    full, nd, nca, _ = active_counts(WI, n, nc, 0)
-    ad, ac = wdof(WI, nc, n, WD_AD), wvec(WI, nc, WC_AC)
+    full, nd = active_dofs(WI, n)
+    full, nca = active_contacts(WI, nc)
+    ad, ac = wdof(WI, nc, n, WD_ALL if full else WD_AD), wvec(WI, nc, WC_ALL if full else WC_AC)
     Kp, Ki = vec(I, I, O_KP, n + 1), I[I[O_KI]:]
     Cp, Ci = vec(I, I, O_CP, n + 1), I[I[O_CI]:]
     Kv, Cv = R[I[R_KV]:], R[I[R_CV]:]
@@ -114,7 +129,7 @@ def contact_forces(t, y, cm, I, R, WI, WF):
         WF[I[F_T]] = t
     power = 0.0
     for ii in range(nd):
-        i = ii if full else ad[ii] & NONNEG
+        i = ad[ii] & NONNEG
         s = 0.0
         for e in range(Kp[i] & NONNEG, Kp[i + 1]):
             s -= Kv[e] * y[Ki[e] & NONNEG]
@@ -126,7 +141,7 @@ def contact_forces(t, y, cm, I, R, WI, WF):
             power += load * y[n + i]
         F[i] = s
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         dl = -cgap[j]
         dd = 0.0
         vv = 0.0
@@ -171,7 +186,7 @@ def contact_forces(t, y, cm, I, R, WI, WF):
         if null_pivot_active(I, WI):  # noqa: F821
             least_cone_ratio(y, I, R, WI, WF)  # noqa: F821
         for jj in range(nca):
-            j = jj if full else ac[jj] & NONNEG
+            j = ac[jj] & NONNEG
             if stk[j]:
                 cf[j] = xst[j]
                 for k in range(4):
@@ -180,7 +195,7 @@ def contact_forces(t, y, cm, I, R, WI, WF):
                         F[i] -= xst[j] * cgr[4 * j + k]
     invm = vec(R, I, R_INVM, n)
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         if cnk[j] == NK_DAMPED and cm[j] != 0:   # dN/dt = k ddelta/dt + c d2delta/dt2
             cNd[j] += cc[j] * penetration_acceleration(j, F, invm, cidx, cgn)
     return power
@@ -210,17 +225,18 @@ def rhs_guards(t, y, cm, I, R, WI, WF, out, G):
 def rates(y, cm, I, R, WI, WF, out, power):
     """``dy/dt`` from the forces of the last ``contact_forces`` (``power``: the forcing's input power)."""
     n, nc = I[H_N], I[H_NC]
-    full, nd, nca, _ = active_counts(WI, n, nc, 0)
-    ad, ac = wdof(WI, nc, n, WD_AD), wvec(WI, nc, WC_AC)
+    full, nd = active_dofs(WI, n)
+    full, nca = active_contacts(WI, nc)
+    ad, ac = wdof(WI, nc, n, WD_ALL if full else WD_AD), wvec(WI, nc, WC_ALL if full else WC_AC)
     claw = vec(I, I, O_CLAW, nc)
     invm, F = vec(R, I, R_INVM, n), vec(WF, I, F_F, n)
     cN, cNd, cv, cf = vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc), vec(WF, I, F_FR, nc)
     for ii in range(nd):
-        i = ii if full else ad[ii] & NONNEG
+        i = ad[ii] & NONNEG
         out[i] = y[n + i]
         out[n + i] = invm[i] * F[i]
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         so = law_offset(I, j)
         law_rates(claw[j], cm[j], cN[j], cNd[j], cv[j], cf[j], y, so, R, I, j, out, so)  # noqa: F821
     n_law = 2 * n + I[H_NLAW]
@@ -228,7 +244,7 @@ def rates(y, cm, I, R, WI, WF, out, power):
         Cp, Ci, Cv = vec(I, I, O_CP, n + 1), I[I[O_CI]:], R[I[R_CV]:]
         visc = 0.0
         for ii in range(nd):
-            i = ii if full else ad[ii] & NONNEG
+            i = ad[ii] & NONNEG
             s = 0.0
             for e in range(Cp[i] & NONNEG, Cp[i + 1]):
                 s += Cv[e] * y[n + (Ci[e] & NONNEG)]
@@ -237,14 +253,14 @@ def rates(y, cm, I, R, WI, WF, out, power):
         cdl, cdr = vec(WF, I, F_DL, nc), vec(WF, I, F_DR, nc)
         fric = 0.0
         for jj in range(nca):
-            j = jj if full else ac[jj] & NONNEG
+            j = ac[jj] & NONNEG
             if cnk[j] == NK_DAMPED:   # the dashpot while closed; the spring's release while open
                 if cm[j] != 0:
                     visc += cc[j] * cdr[j] * cdr[j]
                 elif cdl[j] > 0.0:
                     visc -= ck[j] * cdl[j] * cdr[j]
         for jj in range(nca):
-            j = jj if full else ac[jj] & NONNEG
+            j = ac[jj] & NONNEG
             if cm[j] != 0:
                 fric += law_dissipation(claw[j], cm[j], cN[j], cNd[j], cv[j], cf[j], y,  # noqa: F821
                                         law_offset(I, j), R, I, j)
@@ -260,25 +276,25 @@ def rk4_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1):
     previous step, or the first trial from the same point).
     """
     n, nc = I[H_N], I[H_NC]
-    full, _, _, nsa = active_counts(WI, n, nc, y.shape[0])
-    rows = wrow(WI, nc, n, y.shape[0])
+    full, nsa = active_rows(WI, y.shape[0])
+    rows = wrow(WI, nc, n, y.shape[0], 1 if full else 0)
     k1, k2, k3, k4, tmp = SC[0], SC[1], SC[2], SC[3], SC[4]
     if not have_k1:
         rhs(t, y, cm, I, R, WI, WF, k1)
     for ii in range(nsa):
-        i = ii if full else rows[ii] & NONNEG
+        i = rows[ii] & NONNEG
         tmp[i] = y[i] + 0.5 * h * k1[i]
     rhs(t + 0.5 * h, tmp, cm, I, R, WI, WF, k2)
     for ii in range(nsa):
-        i = ii if full else rows[ii] & NONNEG
+        i = rows[ii] & NONNEG
         tmp[i] = y[i] + 0.5 * h * k2[i]
     rhs(t + 0.5 * h, tmp, cm, I, R, WI, WF, k3)
     for ii in range(nsa):
-        i = ii if full else rows[ii] & NONNEG
+        i = rows[ii] & NONNEG
         tmp[i] = y[i] + h * k3[i]
     rhs(t + h, tmp, cm, I, R, WI, WF, k4)
     for ii in range(nsa):
-        i = ii if full else rows[ii] & NONNEG
+        i = rows[ii] & NONNEG
         out[i] = y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
 
 
@@ -293,8 +309,8 @@ def rk_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1):
         rk4_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1)
         return 3 if have_k1 else 4
     n, nc = I[H_N], I[H_NC]
-    full, _, _, nsa = active_counts(WI, n, nc, y.shape[0])
-    rows = wrow(WI, nc, n, y.shape[0])
+    full, nsa = active_rows(WI, y.shape[0])
+    rows = wrow(WI, nc, n, y.shape[0], 1 if full else 0)
     o = I[R_RK]
     ob = o + s * s
     oc = ob + s
@@ -303,24 +319,24 @@ def rk_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1):
         rhs(t, y, cm, I, R, WI, WF, SC[0])
     for st in range(1, s):
         for ii in range(nsa):
-            i = ii if full else rows[ii] & NONNEG
+            i = rows[ii] & NONNEG
             tmp[i] = y[i]
         for q in range(st):
             a = h * R[o + st * s + q]
             if a != 0.0:
                 kq = SC[0] if q == 0 else SC[SC_ROWS + q - 1]
                 for ii in range(nsa):
-                    i = ii if full else rows[ii] & NONNEG
+                    i = rows[ii] & NONNEG
                     tmp[i] += a * kq[i]
         rhs(t + R[oc + st] * h, tmp, cm, I, R, WI, WF, SC[SC_ROWS + st - 1])
     for ii in range(nsa):
-        i = ii if full else rows[ii] & NONNEG
+        i = rows[ii] & NONNEG
         out[i] = y[i]
     for q in range(s):
         bq = h * R[ob + q]
         if bq != 0.0:
             kq = SC[0] if q == 0 else SC[SC_ROWS + q - 1]
             for ii in range(nsa):
-                i = ii if full else rows[ii] & NONNEG
+                i = rows[ii] & NONNEG
                 out[i] += bq * kq[i]
     return s - 1 if have_k1 else s

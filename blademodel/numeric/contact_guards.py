@@ -8,7 +8,7 @@ unknown). The tables ``NG``, ``GDIR`` describe each law kind's guards.
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import (NONNEG, F_DL, F_DR, F_FR, F_N, F_ND, F_V, F_XD, H_N, H_NC, NK_DAMPED, NK_LOAD,
+from blademodel.numeric.contract import (WC_ALL, NONNEG, F_DL, F_DR, F_FR, F_N, F_ND, F_V, F_XD, H_N, H_NC, NK_DAMPED, NK_LOAD,
                                          NK_SPRING, O_CIDX, O_CLAW, O_CNK, R_CC, R_GN, R_GR, R_K, R_N0, WC_AC,
                                          WC_FIRED, WC_STK)
 
@@ -53,15 +53,15 @@ def eval_guards(t, y, cm, I, R, WI, WF, G):
 def guards_of_forces(y, cm, I, R, WI, WF, G):
     """The active contacts' guards from the forces of the last ``contact_forces``."""
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac = wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
     claw = vec(I, I, O_CLAW, nc)  # noqa: F821
     cN, cNd, cv, cf, cdl = (vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc),  # noqa: F821
                             vec(WF, I, F_FR, nc), vec(WF, I, F_DL, nc))  # noqa: F821
     cnk, cc, cn0, ck = vec(I, I, O_CNK, nc), vec(R, I, R_CC, nc), vec(R, I, R_N0, nc), vec(R, I, R_K, nc)  # noqa: F821
     cdr = vec(WF, I, F_DR, nc)  # noqa: F821
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         G[j, 0] = normal_guard(j, cm[j], cnk[j], cdl[j], cdr[j], cN[j], ck, cc, cn0)
         law_guards(claw[j], cm[j], cN[j], cNd[j], cv[j], cf[j], y, law_offset(I, j), R, I, j, G)  # noqa: F821
 
@@ -89,8 +89,8 @@ def guard_rates(y, dy, cm, I, R, WI, WF, D, with_stick):
     the motion); NaN elsewhere.
     """
     n, nc = I[H_N], I[H_NC]
-    full, _, nca, _ = active_counts(WI, n, nc, 0)  # noqa: F821
-    ac, stk = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_STK)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, stk = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_STK)  # noqa: F821
     claw, cidx = vec(I, I, O_CLAW, nc), vec(I, I, O_CIDX, 4 * nc)  # noqa: F821
     cgn, cgr, ck = vec(R, I, R_GN, 4 * nc), vec(R, I, R_GR, 4 * nc), vec(R, I, R_K, nc)  # noqa: F821
     cN, cNd, cv, cf = vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc), vec(WF, I, F_FR, nc)  # noqa: F821
@@ -100,7 +100,7 @@ def guard_rates(y, dy, cm, I, R, WI, WF, D, with_stick):
         stick_force_rates(y, dy, cm, I, R, WI, WF)  # noqa: F821
     cnk, cc = vec(I, I, O_CNK, nc), vec(R, I, R_CC, nc)  # noqa: F821
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         D[j, 0] = normal_guard_rate(j, cm[j], cnk[j], cdr[j], cNd[j], dy, n, cidx, cgn, ck, cc)
         for gi in range(1, D.shape[1]):
             D[j, gi] = math.nan
@@ -117,10 +117,10 @@ def guard_rates(y, dy, cm, I, R, WI, WF, D, with_stick):
 def copy_guards(I, WI, G, Gm, D, Dm):
     """``G, D = Gm, Dm`` (guards and their rates) on the active contacts."""
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac = wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         for gi in range(G.shape[1]):
             G[j, gi] = Gm[j, gi]
             D[j, gi] = Dm[j, gi]
@@ -152,11 +152,11 @@ def first_crossing(cm, I, WI, G0, G1):
     nothing (outside an event no contact is marked).
     """
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac, fired = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_FIRED)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, fired = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_FIRED)  # noqa: F821
     claw = vec(I, I, O_CLAW, nc)  # noqa: F821
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         if fired[j] != 0:
             continue
         gi = contact_crossing(j, cm[j], claw[j], G0, G1)
@@ -169,13 +169,13 @@ def earliest_crossing(cm, I, WI, Glo, G1, Dlo, D1, lo, hi, dt):
     """``j * GMAX + gi`` of the crossed active guard with the earliest predicted root in ``(lo, hi)``, and that
     root."""
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac = wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
     claw = vec(I, I, O_CLAW, nc)  # noqa: F821
     best = -1
     xbest = hi
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         K = claw[j]
         m = cm[j]
         for gi in range(NG[K, m]):  # noqa: F821
@@ -200,11 +200,11 @@ def first_near_crossing(cm, I, WI, Gs, G1, span, tol):
     if span <= 0.0:
         return -1
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac, fired = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_FIRED)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, fired = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_FIRED)  # noqa: F821
     claw = vec(I, I, O_CLAW, nc)  # noqa: F821
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         if fired[j] != 0:
             continue
         K = claw[j]
@@ -268,12 +268,12 @@ def contact_grazing(j, m, K, G0, G1, D0, D1, dt, width):
 def grazing_candidate(cm, I, WI, G0, G1, D0, D1, dt, width):
     """The earliest grazing fraction (``contact_grazing``) over the active contacts, or -1."""
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac = wvec(WI, nc, WC_AC)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac = wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
     claw = vec(I, I, O_CLAW, nc)  # noqa: F821
     best = -1.0
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         s = contact_grazing(j, cm[j], claw[j], G0, G1, D0, D1, dt, width)
         if s > 0.0 and (best < 0.0 or s < best):
             best = s

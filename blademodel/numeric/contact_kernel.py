@@ -169,7 +169,12 @@ def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4") -> tup
               np.float64, 0)
     WF[header[contract.F_T]] = math.nan   # the time of the forcing's sin and cos in F_SG, F_CG: none yet
     I = np.concatenate([header, ints])
-    WI = np.zeros(contract.W_HEAD + contract.WC_COUNT * nc + contract.WD_COUNT * n + n_state, dtype=np.int64)
+    o_dof = contract.W_HEAD + contract.WC_COUNT * nc
+    o_rows = o_dof + contract.WD_COUNT * n
+    WI = np.zeros(o_rows + 2 * n_state, dtype=np.int64)
+    WI[contract.W_HEAD + contract.WC_ALL * nc:contract.W_HEAD + (contract.WC_ALL + 1) * nc] = np.arange(nc)
+    WI[o_dof + contract.WD_ALL * n:o_dof + (contract.WD_ALL + 1) * n] = np.arange(n)
+    WI[o_rows + n_state:o_rows + 2 * n_state] = np.arange(n_state)
     WI[contract.W_FULL] = 1
     WI[contract.W_NULL] = -1
     return I, R, WI, WF
@@ -207,6 +212,12 @@ class ContactIntegrator(Integrator):
         ``grazing_events``). Guards with known rates only: the penetration.
     method : {"rk4", "rk8"}
         Stepping method (:mod:`~blademodel.numeric.methods`).
+    local_events : bool
+        Step each *cluster* (the coordinates and contacts coupled to a contact whose
+        guard crossed) through its events on its own while the rest of the model
+        keeps the whole step (the default: the work of an event grows with its
+        cluster, not with the model); ``False`` takes every step of the whole model
+        through every event, for comparison (``docs/solver.md``).
     event_location : {"predicted", "bisection"}
         How an event's bracket is shrunk: from predicted roots (the default here) or
         by bisection (:class:`~blademodel.numeric.integrator.HybridIntegrator`).
@@ -217,7 +228,7 @@ class ContactIntegrator(Integrator):
     def __init__(self, model: Model, *, steps_per_period: int = 1000, event_tol: float = 1e-10,
                  max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
                  check_stability: bool = True, max_pivots: int | None = None, detect_grazing: bool = True,
-                 event_location: str = "predicted", method: str = "rk4"):
+                 event_location: str = "predicted", method: str = "rk4", local_events: bool = True):
         self._settings(model, steps_per_period, event_tol, max_events_per_step, period)
         self.module, self.kmeta = compile_contact_kernel(model)
         laws, kind = law_kinds(model)
@@ -244,6 +255,7 @@ class ContactIntegrator(Integrator):
                      "contact_guards": [self.kmeta["kinds"][k]["guards"] for k in kind]}
         self.nc = len(model.contacts)
         self.detect_grazing = bool(detect_grazing)
+        self.local_events = bool(local_events)
         from .integrator import check_event_location
         self.event_location = check_event_location(event_location)
         self.max_pivots = int(max_pivots) if max_pivots is not None else 4 * self.nc + 20
@@ -428,7 +440,7 @@ class ContactIntegrator(Integrator):
             y, cm, self.I, self.R, self.WI, self.WF, self.SC, self.GS, self.period, self.steps_per_period, int(start_period),
             int(end_period), int(start_period if n_transient is None else n_transient), int(record_every),
             self.event_tol, self.max_events_per_step, self.max_pivots, self.detect_grazing,
-            self.event_location == "predicted", rec_t, rec_y, rec_cm, rec_N, rec_f, poincare,
+            self.event_location == "predicted", self.local_events, rec_t, rec_y, rec_cm, rec_N, rec_f, poincare,
             log_t, log_c, log_g, log_f, log_to, counters, stats)
         return int(status), cm, float(t)
 

@@ -78,10 +78,10 @@ and the guards and rates at the start of a step whose events are handled, 9 and
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import (C_EVENTS, C_GRAZING, C_LOGGED, C_RECORDS, C_RHS, C_STEPS, F_ACC, F_FR,
+from blademodel.numeric.contract import (C_CLUSTERS, C_RESTARTS, C_EVENTS, C_GRAZING, C_LOGGED, C_RECORDS, C_RHS, C_STEPS, F_ACC, F_FR,
                                          F_N, H_N, H_NC, H_NLAW, S_MAX_CONE_RATIO, SC_Y0, STATUS_EVENT_STORM,
                                          STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE, STATUS_OK, W_NB, W_NEV,
-                                         W_NS, W_STAMP, WC_CM0, WC_CMSTEP, WC_FIRED, WC_MARK, WC_SEED)
+                                         W_NS, W_STAMP, WC_CM0, WC_CMSTEP, WC_FIRED, WC_SEED)
 
 
 def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_events, max_pivots, detect_grazing,
@@ -206,8 +206,11 @@ def whole_step(t, t_end, y, cm, I, R, WI, WF, SC, GS, g0_valid, width, detect_gr
 
 
 def step_clusters(t0, t_end, y, cm, I, R, WI, WF, SC, GS, tol_t, max_events, max_pivots, detect_grazing, predicted,
-                  log_t, log_c, log_g, log_from, log_to, counters, recording):
+                  local, log_t, log_c, log_g, log_from, log_to, counters, recording):
     """Step the clusters of the step's seeds through their events; the rest keeps the whole step.
+
+    Without ``local`` the whole model is the one cluster (every event splits every
+    coordinate's step: for comparison).
 
     On entry ``y`` is the state at ``t0`` and ``SC[5]``, ``SC[8]``, ``GS[1]``, ``GS[5]``
     hold the whole model's step to ``t_end``; on return (``STATUS_OK``) they hold the
@@ -221,8 +224,7 @@ def step_clusters(t0, t_end, y, cm, I, R, WI, WF, SC, GS, tol_t, max_events, max
     n, nc = I[H_N], I[H_NC]
     y1, knext, Y0 = SC[5], SC[8], SC[SC_Y0]
     G0, G1, D0, D1 = GS[0], GS[1], GS[4], GS[5]
-    seed, cmark, cmstep, cm0 = (wvec(WI, nc, WC_SEED), wvec(WI, nc, WC_MARK), wvec(WI, nc, WC_CMSTEP),  # noqa: F821
-                                wvec(WI, nc, WC_CM0))  # noqa: F821
+    seed, cmstep, cm0 = wvec(WI, nc, WC_SEED), wvec(WI, nc, WC_CMSTEP), wvec(WI, nc, WC_CM0)  # noqa: F821
     n_law = 2 * n + I[H_NLAW]
     energy = n_state > n_law
     acc = vec(WF, I, F_ACC, 3)  # noqa: F821
@@ -241,10 +243,12 @@ def step_clusters(t0, t_end, y, cm, I, R, WI, WF, SC, GS, tol_t, max_events, max
         WI[W_NEV] = 0
         first_stamp = WI[W_STAMP] + 1
         d0 = d1 = d2 = 0.0
-        for js in range(nc):
-            if seed[js] == 0 or cmark[js] >= first_stamp:
-                continue   # not a seed, or in a cluster of this pass already
-            build_cluster(js, cm, I, WI, n_state, first_stamp)  # noqa: F821
+        js = runtime(-1)  # noqa: F821
+        while True:
+            js = next_cluster(js, local, cm, I, WI, n_state, first_stamp)  # noqa: F821
+            if js < 0:
+                break
+            counters[C_CLUSTERS] += 1
             status, te = process_cluster(t0, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_events,
                                          max_pivots, detect_grazing, predicted, log_t, log_c, log_g, log_from,
                                          log_to, counters, recording)
@@ -275,6 +279,7 @@ def step_clusters(t0, t_end, y, cm, I, R, WI, WF, SC, GS, tol_t, max_events, max
         factor_stick(cm, I, R, WI, WF)  # noqa: F821
         seed[jb] = 1
         reuse = False
+        counters[C_RESTARTS] += 1
     if energy:
         y1[n_law] = a0 + d0
         y1[n_law + 1] = a1 + d1
@@ -310,7 +315,7 @@ def record(irec, t, y, cm, I, R, WI, WF, rec_t, rec_y, rec_cm, rec_N, rec_f):
 
 
 def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_period, end_period, n_transient,
-              record_every, event_tol, max_events, max_pivots, detect_grazing, predicted, rec_t, rec_y, rec_cm,
+              record_every, event_tol, max_events, max_pivots, detect_grazing, predicted, local, rec_t, rec_y, rec_cm,
               rec_N, rec_f, poincare, log_t, log_c, log_g, log_from, log_to, counters, stats):
     """Integrate excitation periods ``start_period`` to ``end_period`` (exclusive).
 
@@ -333,7 +338,7 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
     energy = n > 2 * I[H_N] + I[H_NLAW]
     t = period * start_period
     irec = counters[C_RECORDS]
-    g0_valid = False
+    g0_valid = runtime(False)  # noqa: F821 (a literal would compile whole_step twice)
     factor_stick(cm, I, R, WI, WF)  # noqa: F821
     for j in range(nc):
         cm0[j] = cm[j]
@@ -352,7 +357,7 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
             g0_valid = True
             if seeds > 0:
                 status, te = step_clusters(t, t_end, y, cm, I, R, WI, WF, SC, GS, tol_t, max_events, max_pivots,
-                                           detect_grazing, predicted, log_t, log_c, log_g, log_from, log_to,
+                                           detect_grazing, predicted, local, log_t, log_c, log_g, log_from, log_to,
                                            counters, recording)
                 if status != STATUS_OK:
                     counters[C_RECORDS] = irec

@@ -10,7 +10,7 @@ the same; what is saved is compiling a solver that could never run (about a
 quarter of the cold compile).
 """
 
-from blademodel.numeric.contract import H_NC, NONNEG, W_NS, W_NULL, WC_AC, WC_U
+from blademodel.numeric.contract import H_NC, NONNEG, W_NS, W_NULL, WC_AC, WC_U, WC_ALL
 
 
 def factor_stick(cm, I, R, WI, WF):
@@ -57,10 +57,10 @@ def project_onto_stick(y, I, R, WI, WF):
 def rigid_problem(cm, I, WI):
     """No rigid contact: no friction problem (``U`` cleared on the active set)."""
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821 (the templates' helpers, defined before this file)
-    U, ac = wvec(WI, nc, WC_U), wvec(WI, nc, WC_AC)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821 (the templates' helpers, defined before this file)
+    U, ac = wvec(WI, nc, WC_U), wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
     for jj in range(nca):
-        U[jj if full else ac[jj] & NONNEG] = 0
+        U[ac[jj] & NONNEG] = 0
     return False
 
 

@@ -26,7 +26,7 @@ while that ratio is at most 1, i.e. while *some* admissible distribution exists.
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import (NONNEG, F_B, F_CG, F_D, F_FD, F_FR, F_L, F_N, F_ND, F_NULL, F_SG, F_V, F_X,
+from blademodel.numeric.contract import (WD_ALL, WC_ALL, NONNEG, F_B, F_CG, F_D, F_FD, F_FR, F_L, F_N, F_ND, F_NULL, F_SG, F_V, F_X,
                                          F_XD, H_N, H_NC, H_NF, H_NG, O_CI, O_CIDX, O_CLAW, O_CP, O_FG, O_FP,
                                          O_KI, O_KP, O_WI, O_WP, R_CV, R_FC, R_FS, R_GN, R_GR, R_INVM, R_K, R_KV,
                                          R_OM, R_W, W_FULL, W_NS, W_NULL, W_STAMP, WC_AC, WC_ENV, WC_MARK,
@@ -49,10 +49,10 @@ def stick_rates_known(I, WI):
     nc = I[H_NC]
     if WI[W_NS] == 0 or null_pivot_active(I, WI):
         return False
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac, stk = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_STK)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, stk = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_STK)  # noqa: F821
     for jj in range(nca):
-        if stk[jj if full else ac[jj] & NONNEG]:
+        if stk[ac[jj] & NONNEG]:
             return True
     return False
 
@@ -60,23 +60,23 @@ def stick_rates_known(I, WI):
 def factor_stick(cm, I, R, WI, WF):
     """Flag the active set's sticking rigid contacts and factor their Delassus rows (envelope LDL^T)."""
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac, stk, env = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_STK), wvec(WI, nc, WC_ENV)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, stk, env = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_STK), wvec(WI, nc, WC_ENV)  # noqa: F821
     claw = vec(I, I, O_CLAW, nc)  # noqa: F821
     W, Lf = vec(R, I, R_W, nc * nc), vec(WF, I, F_L, nc * nc)  # noqa: F821
     Dd, nullv = vec(WF, I, F_D, nc), vec(WF, I, F_NULL, nc)  # noqa: F821
     Wp, Wi = vec(I, I, O_WP, nc + 1), I[I[O_WI]:]  # noqa: F821
     if null_pivot_active(I, WI):
         WI[W_NULL] = -1
-    ns = 0 if full else WI[W_NS] & NONNEG
+    ns = WI[W_NS] & NONNEG
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         s = 1 if IS_STICK[claw[j], cm[j]] else 0  # noqa: F821
         ns += s - (0 if full else stk[j])
         stk[j] = s
     WI[W_NS] = ns
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         if not stk[j]:
             continue
         e = j
@@ -104,7 +104,7 @@ def factor_stick(cm, I, R, WI, WF):
         Dd[j] = d
     if null_pivot_active(I, WI):
         for jj in range(nca):
-            j = jj if full else ac[jj] & NONNEG
+            j = ac[jj] & NONNEG
             nullv[j] = 0.0
         nullv[WI[W_NULL]] = 1.0
         back_substitute(I, WI, WF, nullv)
@@ -113,11 +113,11 @@ def factor_stick(cm, I, R, WI, WF):
 def back_substitute(I, WI, WF, x):
     """Solve ``L^T x = z`` in place on the active set's sticking rows (unit lower ``L``, envelope storage)."""
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac, stk, env = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_STK), wvec(WI, nc, WC_ENV)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, stk, env = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_STK), wvec(WI, nc, WC_ENV)  # noqa: F821
     Lf = vec(WF, I, F_L, nc * nc)  # noqa: F821
     for jj in range(nca - 1, -1, -1):
-        k = jj if full else ac[jj] & NONNEG
+        k = ac[jj] & NONNEG
         if not stk[k]:
             continue
         xk = x[k]
@@ -134,11 +134,11 @@ def solve_stick(I, WI, WF, b, x):
     ``b`` may be ``x``.
     """
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac, stk, env = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_STK), wvec(WI, nc, WC_ENV)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, stk, env = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_STK), wvec(WI, nc, WC_ENV)  # noqa: F821
     Lf, Dd = vec(WF, I, F_L, nc * nc), vec(WF, I, F_D, nc)  # noqa: F821
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         if not stk[j]:
             continue
         s = b[j]
@@ -148,7 +148,7 @@ def solve_stick(I, WI, WF, b, x):
                 s -= Lf[r + k] * x[k]
         x[j] = s
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         if stk[j]:
             x[j] = x[j] / Dd[j] if Dd[j] != 0.0 else 0.0
     back_substitute(I, WI, WF, x)
@@ -157,11 +157,11 @@ def solve_stick(I, WI, WF, b, x):
 def stick_solution(F, b, x, I, R, WI, WF):
     """The stick forces ``x`` for generalized forces ``F``: ``W_SS x = b = G_S M^-1 F`` (``b`` may be ``x``)."""
     n, nc = I[H_N], I[H_NC]
-    full, _, nca, _ = active_counts(WI, n, nc, 0)  # noqa: F821
-    ac, stk = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_STK)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, stk = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_STK)  # noqa: F821
     cidx, cgr, invm = vec(I, I, O_CIDX, 4 * nc), vec(R, I, R_GR, 4 * nc), vec(R, I, R_INVM, n)  # noqa: F821
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         if not stk[j]:
             continue
         s = 0.0
@@ -181,53 +181,81 @@ def slip_bound(j, y, I, R, WF):
 
 
 def least_cone_ratio(y, I, R, WI, WF):
-    """Shift the active set's stick forces along the null vector to minimise ``max |x| / bound``."""
+    """Shift the active set's stick forces along the null vector to minimise ``max |x| / bound``.
+
+    ``f(c) = max_j |x_j + c n_j| / b_j`` is convex and piecewise linear in ``c``; its
+    minimum lies where the steepest rising and falling pieces meet. Bisection on the
+    sign of the slope narrows the bracket until the pieces active at its two ends
+    meet inside it with no piece above them there; ``c`` is then their exact
+    intersection (two or three bisections when few contacts stick). The inverse
+    bounds are kept in ``bst`` (free once the stick forces are solved).
+    """
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac, stk = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_STK)  # noqa: F821
-    xst, nullv = vec(WF, I, F_X, nc), vec(WF, I, F_NULL, nc)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, stk = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_STK)  # noqa: F821
+    xst, nullv, w = vec(WF, I, F_X, nc), vec(WF, I, F_NULL, nc), vec(WF, I, F_B, nc)  # noqa: F821
     lo = math.inf
     hi = -math.inf
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
-        if stk[j] and nullv[j] != 0.0:
-            c = -xst[j] / nullv[j]
-            lo = min(lo, c)
-            hi = max(hi, c)
+        j = ac[jj] & NONNEG
+        if stk[j]:
+            w[j] = 1.0 / max(slip_bound(j, y, I, R, WF), 1e-300)
+            if nullv[j] != 0.0:
+                c = -xst[j] / nullv[j]
+                lo = min(lo, c)
+                hi = max(hi, c)
     if not lo < hi:
         return
-    for _ in range(80):
-        c = 0.5 * (lo + hi)
-        worst = -1.0
-        slope = 0.0
-        for jj in range(nca):
-            j = jj if full else ac[jj] & NONNEG
-            if not stk[j]:
-                continue
-            w = 1.0 / max(slip_bound(j, y, I, R, WF), 1e-300)
-            val = (xst[j] + c * nullv[j]) * w
-            if abs(val) > worst:
-                worst = abs(val)
-                slope = (1.0 if val >= 0.0 else -1.0) * nullv[j] * w
-        if slope > 0.0:
-            hi = c
-        else:
-            lo = c
+    # the pieces active at lo (falling: value a0 + s0 c) and at hi (rising: a1 + s1 c)
+    _, a0, s0 = cone_piece(lo, nca, ac, stk, xst, nullv, w)
+    _, a1, s1 = cone_piece(hi, nca, ac, stk, xst, nullv, w)
     c = 0.5 * (lo + hi)
+    for _ in range(200):
+        if s1 > s0:
+            cx = (a0 - a1) / (s1 - s0)
+            if lo <= cx <= hi and cone_piece(cx, nca, ac, stk, xst, nullv, w)[0] <= (a1 + s1 * cx) * (1.0 + 1e-12):
+                c = cx
+                break
+        c = 0.5 * (lo + hi)
+        if not lo < c < hi:
+            break
+        _, a, slope = cone_piece(c, nca, ac, stk, xst, nullv, w)
+        if slope > 0.0:
+            hi, a1, s1 = c, a, slope
+        else:
+            lo, a0, s0 = c, a, slope
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         if stk[j]:
             xst[j] += c * nullv[j]
+
+
+def cone_piece(c, nca, ac, stk, xst, nullv, w):
+    """``(f(c), a, s)``: the largest cone ratio at ``c`` and its piece ``a + s c`` (see ``least_cone_ratio``)."""
+    worst = -1.0
+    a = 0.0
+    s = 0.0
+    for jj in range(nca):
+        j = ac[jj] & NONNEG
+        if not stk[j]:
+            continue
+        val = (xst[j] + c * nullv[j]) * w[j]
+        if abs(val) > worst:
+            worst = abs(val)
+            sign = 1.0 if val >= 0.0 else -1.0
+            a = sign * xst[j] * w[j]
+            s = sign * nullv[j] * w[j]
+    return worst, a, s
 
 
 def cone_ratio(y, I, R, WI, WF):
     """Largest ``|f| / bound`` over the active set's sticking rigid contacts (after ``contact_forces``)."""
     nc = I[H_NC]
-    full, _, nca, _ = active_counts(WI, 0, nc, 0)  # noqa: F821
-    ac, stk, cf = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_STK), vec(WF, I, F_FR, nc)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, stk, cf = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_STK), vec(WF, I, F_FR, nc)  # noqa: F821
     worst = 0.0
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         if not stk[j]:
             continue
         b = slip_bound(j, y, I, R, WF)
@@ -239,12 +267,12 @@ def cone_ratio(y, I, R, WI, WF):
 def project_onto_stick(y, I, R, WI, WF):
     """Project the active velocities onto zero slip of every sticking contact (``u -= M^-1 G^T W^-1 G u``)."""
     n, nc = I[H_N], I[H_NC]
-    full, _, nca, _ = active_counts(WI, n, nc, 0)  # noqa: F821
-    ac, stk = wvec(WI, nc, WC_AC), wvec(WI, nc, WC_STK)  # noqa: F821
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, stk = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_STK)  # noqa: F821
     cidx, cgr, invm = vec(I, I, O_CIDX, 4 * nc), vec(R, I, R_GR, 4 * nc), vec(R, I, R_INVM, n)  # noqa: F821
     bst, xst = vec(WF, I, F_B, nc), vec(WF, I, F_X, nc)  # noqa: F821
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         if not stk[j]:
             continue
         s = 0.0
@@ -255,7 +283,7 @@ def project_onto_stick(y, I, R, WI, WF):
         bst[j] = s
     solve_stick(I, WI, WF, bst, xst)
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         if not stk[j]:
             continue
         for k in range(4):
@@ -273,8 +301,9 @@ def stick_force_rates(y, dy, cm, I, R, WI, WF):
     forcing, normal forces and explicit friction forces (``law_force_rate``).
     """
     n, nc = I[H_N], I[H_NC]
-    full, nd, nca, _ = active_counts(WI, n, nc, 0)  # noqa: F821
-    ad, ac = wdof(WI, nc, n, WD_AD), wvec(WI, nc, WC_AC)  # noqa: F821
+    full, nd = active_dofs(WI, n)  # noqa: F821
+    full, nca = active_contacts(WI, nc)
+    ad, ac = wdof(WI, nc, n, WD_ALL if full else WD_AD), wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
     Kp, Ki = vec(I, I, O_KP, n + 1), I[I[O_KI]:]  # noqa: F821
     Cp, Ci = vec(I, I, O_CP, n + 1), I[I[O_CI]:]  # noqa: F821
     Kv, Cv = R[I[R_KV]:], R[I[R_CV]:]
@@ -286,7 +315,7 @@ def stick_force_rates(y, dy, cm, I, R, WI, WF):
     cN, cNd, cv = vec(WF, I, F_N, nc), vec(WF, I, F_ND, nc), vec(WF, I, F_V, nc)  # noqa: F821
     Fd, xd = vec(WF, I, F_FD, n), vec(WF, I, F_XD, nc)  # noqa: F821
     for ii in range(nd):
-        i = ii if full else ad[ii] & NONNEG
+        i = ad[ii] & NONNEG
         s = 0.0
         for e in range(Kp[i] & NONNEG, Kp[i + 1]):
             s -= Kv[e] * y[n + (Ki[e] & NONNEG)]
@@ -297,7 +326,7 @@ def stick_force_rates(y, dy, cm, I, R, WI, WF):
             s += om[g] * (fs[e] * cg[g] - fc[e] * sg[g])
         Fd[i] = s
     for jj in range(nca):
-        j = jj if full else ac[jj] & NONNEG
+        j = ac[jj] & NONNEG
         mode = cm[j]
         if mode == 0:
             continue

@@ -34,11 +34,13 @@ C_LOGGED = 4          #: events offered to the log (may exceed its length)
 C_RECORDS = 5         #: records written (the next record's row)
 C_FRICTION_PIVOTS = 6  #: pivots of the friction complementarity problem (per-contact kernel)
 C_GRAZING = 7         #: crossings found inside a step whose ends showed none (per-contact kernel)
-N_COUNTERS = 8
+C_CLUSTERS = 8        #: clusters stepped through their events (per-contact kernel)
+C_RESTARTS = 9        #: steps begun again because a contact on a cluster's boundary crossed (per-contact kernel)
+N_COUNTERS = 10
 
 #: Names of the integer counters, in index order (``SimulationResult.counters``).
 COUNTER_NAMES = ("steps", "events", "location_substeps", "rhs_evaluations", "events_logged", "records",
-                 "friction_pivots", "grazing_events")
+                 "friction_pivots", "grazing_events", "clusters", "cluster_restarts")
 
 # Float statistics: one float64 array of N_STATS, accumulated across calls.
 S_MAX_CONE_RATIO = 0  #: largest ``|f| / (mu N)`` over sticking rigid-stick contacts at step ends
@@ -99,12 +101,13 @@ W_HEAD = 9     #: header length
 #: envelope, contacts of the friction problem, modes before an event, modes before the friction
 #: problem, the log row of its transition in the current event, the active contacts (a cluster's,
 #: ascending), seeds of the step's clusters, cluster stamp (boundary: minus the stamp), modes at the
-#: step's start, boundary contacts.
-WC_STK, WC_ENV, WC_U, WC_CM0, WC_BEFORE, WC_FIRED, WC_AC, WC_SEED, WC_MARK, WC_CMSTEP, WC_BL = range(11)
-WC_COUNT = 11
-#: Per-coordinate arrays: the active coordinates (a cluster's, in the order found), cluster stamp.
-WD_AD, WD_MARK = 0, 1
-WD_COUNT = 2
+#: step's start, boundary contacts, every contact (``0 ... nc - 1``: the whole model's list).
+WC_STK, WC_ENV, WC_U, WC_CM0, WC_BEFORE, WC_FIRED, WC_AC, WC_SEED, WC_MARK, WC_CMSTEP, WC_BL, WC_ALL = range(12)
+WC_COUNT = 12
+#: Per-coordinate arrays: the active coordinates (a cluster's, in the order found), cluster stamp, every
+#: coordinate (``0 ... n - 1``). The state rows follow: a cluster's, then every row.
+WD_AD, WD_MARK, WD_ALL = 0, 1, 2
+WD_COUNT = 3
 #: Numba fixes up a negative index (``a[-1]``) on every array access whose index it cannot prove
 #: non-negative, such as one read from an index table; the kernels mask such an index's sign bit
 #: (``i & NONNEG``: a no-op on a valid index) so that the compiler sees it is not negative. On the

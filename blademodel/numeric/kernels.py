@@ -26,12 +26,13 @@ def choose_kernel(model: Model, kernel: str = "auto") -> str:
 
 
 def make_integrator(model: Model, *, kernel: str = "auto", detect_grazing: bool = True,
-                    event_location: str | None = None, **settings):
+                    event_location: str | None = None, local_events: bool = True, **settings):
     """The integrator of ``model`` for ``kernel`` (see :func:`choose_kernel`).
 
     ``settings`` go to :class:`~blademodel.numeric.integrator.HybridIntegrator` or
     :class:`~blademodel.numeric.contact_kernel.ContactIntegrator`; ``detect_grazing``
-    to the per-contact kernel only (the product kernel does not look for grazing);
+    and ``local_events`` to the per-contact kernel only (the product kernel does not
+    look for grazing, and its one contact makes the whole model one cluster);
     ``event_location`` (None: each kernel's default) to either.
     """
     if event_location is not None:
@@ -40,4 +41,4 @@ def make_integrator(model: Model, *, kernel: str = "auto", detect_grazing: bool 
         from .integrator import HybridIntegrator
         return HybridIntegrator(model, **settings)
     from .contact_kernel import ContactIntegrator
-    return ContactIntegrator(model, detect_grazing=detect_grazing, **settings)
+    return ContactIntegrator(model, detect_grazing=detect_grazing, local_events=local_events, **settings)

@@ -23,7 +23,7 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
              length_scale: float | None = None, progress=None, chunk_periods: int = 50,
              mode0=None, kernel: str = "auto", record_forces: bool = True,
              detect_grazing: bool = True, event_location: str | None = None,
-             method: str = "rk4") -> SimulationResult:
+             method: str = "rk4", local_events: bool = True) -> SimulationResult:
     """Integrate ``model`` from rest with fixed-step RK4 and located events.
 
     Parameters
@@ -77,6 +77,10 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
     method : {"rk4", "rk8"}
         Stepping method: classical RK4 or an eighth-order Runge-Kutta method
         (:mod:`~blademodel.numeric.methods`), both through the same event location.
+    local_events : bool
+        Per-contact kernel: step each cluster of coupled contacts through its events
+        on its own (the default); ``False`` splits every coordinate's step at every
+        event, for comparison (``docs/solver.md``).
     event_location : {"bisection", "predicted"}, optional
         How events are bracketed; by default bisection on the product-mode kernel
         (the pair's published results, bit for bit) and predicted roots on the
@@ -102,7 +106,7 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
     integ = make_integrator(model, kernel=kernel, steps_per_period=steps_per_period, event_tol=event_tol,
                             max_events_per_step=max_events_per_step, energy=energy, period=period,
                             check_stability=check_stability, method=method, detect_grazing=detect_grazing,
-                            event_location=event_location)
+                            event_location=event_location, local_events=local_events)
     per_contact = integ.kernel == "contact"
     T, n, meta = integ.period, integ.n_state, integ.meta
     y = integ.initial_state(y0)
@@ -167,6 +171,7 @@ def simulate(model: Model, *, periods: int = 1, transient: int = 0, steps_per_pe
         settings={"periods": periods, "transient": transient, "steps_per_period": steps_per_period,
                   "event_tol": event_tol, "record_every": record_every,
                   "kernel": integ.kernel, "detect_grazing": getattr(integ, "detect_grazing", False),
+                  "local_events": getattr(integ, "local_events", False),
                   "event_location": integ.event_location, "method": method},
         contacts=contact, final_contact_modes=np.asarray(mode).copy() if per_contact else None)
     if status != 0 and raise_on_error:
