@@ -89,7 +89,7 @@ from blademodel.zheng2022 import BladePair
 from blademodel.numeric import HybridIntegrator
 cfg = BladePair(**{cfg})
 integ = HybridIntegrator(cfg.build(), steps_per_period={S}, event_tol={TOL})
-y = integ.initial_state(); c = np.zeros(8, dtype=np.int64)
+y = integ.initial_state(); c = np.zeros(N_COUNTERS, dtype=np.int64)
 t0 = time.thread_time()
 st, mode, _ = integ.advance(y, integ.mode_of(y), 0, {P}, counters=c)
 dt = time.thread_time() - t0

@@ -7,6 +7,7 @@ from blademodel.analysis.periodicity import poincare_period
 from blademodel.zheng2022 import BladePair
 from blademodel.numeric import simulate
 from blademodel.numeric.kernels import make_integrator
+from blademodel.numeric.contract import C_EVENTS, N_COUNTERS
 from blademodel.orbits import PeriodMap, continuation, find_periodic_orbit, period_doubled_branch
 from linear_reference import forced_response
 
@@ -219,10 +220,10 @@ def _sweep(cfg, values, periods=300):
             y = np.zeros(ig.n_state)
             mode = ig.mode_of(y)
         status, mode, _ = ig.advance(y, mode, 0, periods - 1)
-        c = np.zeros(8, dtype=np.int64)
+        c = np.zeros(N_COUNTERS, dtype=np.int64)
         status2, mode, _ = ig.advance(y, mode, 0, 1, counters=c)
         assert status == status2 == 0
-        events.append(int(c[1]))
+        events.append(int(c[C_EVENTS]))
     return np.array(events)
 
 

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from blademodel.zheng2022 import BladePair
+from blademodel.numeric.contract import C_LOGGED, N_COUNTERS
 from blademodel.numeric.kernels import make_integrator
 from blademodel.numeric.methods import get_method
 from blademodel.numeric.tangent import SensitivityError, flow_sensitivity
@@ -55,11 +56,11 @@ def _differences(ig, y, mode, periods, d=1e-5):
 def _transitions(ig, y, mode, periods):
     """The set of ``(from, to)`` mode names of the run's events."""
     log = ig.log_buffer(4096)
-    c = np.zeros(8, dtype=np.int64)
+    c = np.zeros(N_COUNTERS, dtype=np.int64)
     full = np.zeros(ig.n_state)
     full[:ig.n_physical] = y
     ig.advance(full, mode, 0, periods, log=log, counters=c)
-    ev = ig.named_events(log, int(c[4]))
+    ev = ig.named_events(log, int(c[C_LOGGED]))
     return {(a.split()[-1], b.split()[-1]) for a, b in zip(ev["from"], ev["to"])}
 
 
