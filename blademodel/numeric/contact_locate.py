@@ -23,7 +23,7 @@ def locate_trial(t, y, dt, frac, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counter
     """
     spent = rk_step(t, y, frac * dt, cm, I, R, WI, WF, SC, ymid, True)  # noqa: F821
     rhs_guards(t + frac * dt, ymid, cm, I, R, WI, WF, SC[4], Gm)   # noqa: F821 (SC[4]: the stages' scratch, free now)
-    guard_rates(ymid, SC[4], cm, I, R, WI, WF, Dm, True)  # noqa: F821
+    guard_rates(ymid, SC[4], cm, I, R, WI, WF, Dm, runtime(True))  # noqa: F821
     counters[C_LOCATION_SUBSTEPS] += 1
     counters[C_RHS] += spent + 1
     return first_crossing(cm, I, WI, G0, Gm)  # noqa: F821

@@ -110,12 +110,12 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
         dt = t_end - t
         if not g0_valid:
             rhs_guards(t, y, cm, I, R, WI, WF, SC[0], G0)  # noqa: F821
-            guard_rates(y, SC[0], cm, I, R, WI, WF, D0, True)  # noqa: F821
+            guard_rates(y, SC[0], cm, I, R, WI, WF, D0, runtime(True))  # noqa: F821
             counters[C_RHS] += 1
         if not (first and reuse):
             spent = rk_step(t, y, dt, cm, I, R, WI, WF, SC, y1, True)  # noqa: F821
             rhs_guards(t_end, y1, cm, I, R, WI, WF, knext, G1)  # noqa: F821
-            guard_rates(y1, knext, cm, I, R, WI, WF, D1, False)  # noqa: F821
+            guard_rates(y1, knext, cm, I, R, WI, WF, D1, runtime(False))  # noqa: F821
             counters[C_RHS] += spent + 1
         if first and y.shape[0] > n_law:
             for k in range(3):
@@ -124,9 +124,9 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
         code = first_crossing(cm, I, WI, G0, G1)  # noqa: F821
         if code >= 0 and stick_rates_known(I, WI):  # noqa: F821
             # the stick guards' rates at both ends (kept without them on a step with no event)
-            guard_rates(y1, knext, cm, I, R, WI, WF, D1, True)  # noqa: F821
+            guard_rates(y1, knext, cm, I, R, WI, WF, D1, runtime(True))  # noqa: F821
             contact_forces(t, y, cm, I, R, WI, WF)  # noqa: F821
-            guard_rates(y, SC[0], cm, I, R, WI, WF, D0, True)  # noqa: F821
+            guard_rates(y, SC[0], cm, I, R, WI, WF, D0, runtime(True))  # noqa: F821
             counters[C_RHS] += 1
         sub = dt   # the sub-step whose end lies past the event
         if code < 0 and detect_grazing:
@@ -178,7 +178,7 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
         # the last event fell on the step's end: the state, its rate and the guards there, after it
         copy_rows(WI, nc, n, y1, y)  # noqa: F821
         rhs_guards(t, y, cm, I, R, WI, WF, knext, G1)  # noqa: F821
-        guard_rates(y, knext, cm, I, R, WI, WF, D1, False)  # noqa: F821
+        guard_rates(y, knext, cm, I, R, WI, WF, D1, runtime(False))  # noqa: F821
         counters[C_RHS] += 1
     return STATUS_OK, t
 
@@ -196,11 +196,11 @@ def whole_step(t, t_end, y, cm, I, R, WI, WF, SC, GS, g0_valid, width, detect_gr
     G0, G1, D0, D1 = GS[0], GS[1], GS[4], GS[5]
     if not g0_valid:
         rhs_guards(t, y, cm, I, R, WI, WF, SC[0], G0)  # noqa: F821
-        guard_rates(y, SC[0], cm, I, R, WI, WF, D0, True)  # noqa: F821
+        guard_rates(y, SC[0], cm, I, R, WI, WF, D0, runtime(True))  # noqa: F821
         counters[C_RHS] += 1
     spent = rk_step(t, y, t_end - t, cm, I, R, WI, WF, SC, y1, True)  # noqa: F821
     rhs_guards(t_end, y1, cm, I, R, WI, WF, knext, G1)  # noqa: F821
-    guard_rates(y1, knext, cm, I, R, WI, WF, D1, False)  # noqa: F821
+    guard_rates(y1, knext, cm, I, R, WI, WF, D1, runtime(False))  # noqa: F821
     counters[C_RHS] += spent + 1
     return mark_seeds(cm, I, WI, G0, G1, D0, D1, t_end - t, width, detect_grazing)  # noqa: F821
 
