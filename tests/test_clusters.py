@@ -94,3 +94,23 @@ def test_a_tuned_bilinear_ring_converges_at_fourth_order():
     err = [np.max(np.abs(runs[S].final_state - ref)) / np.max(np.abs(ref)) for S in (1000, 2000, 4000)]
     assert len({r.counters["events"] for r in runs.values()}) == 1
     assert err[0] < 1e-4 and all(e1 / e2 > 12 for e1, e2 in zip(err, err[1:])), err
+
+
+@pytest.mark.parametrize("local", [True, False], ids=["clusters", "whole model"])
+def test_contacts_closing_in_the_same_instant_keep_their_friction_limit(local):
+    """The symmetric contacts 0 and 2 of a tuned ring close in the same instant; one is fired a rounding error
+    before its own root (``first_near_crossing``), so its stick guard ``mu N - |f|`` starts at -2e-16.
+
+    It must still slip when ``|f|`` reaches ``mu N``. Stepped as one (``local_events=False``) the kernel used to
+    miss that guard (it never changed sign) and kept the contact sticking at ``|f| = mu N + 38 N``.
+    """
+    model = BladedDisk(blades=4, engine_order=2, friction="bilinear").build()
+    r = simulate(model, periods=1, steps_per_period=8000, event_tol=1e-12, local_events=local)
+    c = r.contacts
+    stick = c["modes"] == c["mode_names"][0].index("stick")
+    limit = r.params["mu"] * c["N"]
+    assert stick.any() and (c["modes"] > 1).any()
+    assert np.max(np.where(stick, np.abs(c["f"]) - limit, -np.inf)) <= 1e-9 * np.max(limit)
+    contact = np.asarray(r.events["contact"])
+    t0, t2 = (r.events["t"][contact == c["names"][j]][:4] for j in (0, 2))
+    np.testing.assert_allclose(t0, t2, rtol=0, atol=1e-9 * r.period)   # both close, then slip, at once

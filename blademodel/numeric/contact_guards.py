@@ -8,9 +8,9 @@ unknown). The tables ``NG``, ``GDIR`` describe each law kind's guards.
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import (WC_ALL, NONNEG, F_DL, F_DR, F_FR, F_N, F_ND, F_V, F_XD, H_N, H_NC, NK_DAMPED, NK_LOAD,
+from blademodel.numeric.contract import (W_NNEAR, WC_ALL, NONNEG, F_DL, F_DR, F_FR, F_N, F_ND, F_V, F_XD, H_N, H_NC, NK_DAMPED, NK_LOAD,
                                          NK_SPRING, O_CIDX, O_CLAW, O_CNK, R_CC, R_GN, R_GR, R_K, R_N0, WC_AC,
-                                         WC_FIRED, WC_STK)
+                                         WC_FIRED, WC_NEAR, WC_STK)
 
 
 def normal_guard(j, mode, nk, dl, dd, N, ck, cc, cn0):
@@ -112,6 +112,57 @@ def guard_rates(y, dy, cm, I, R, WI, WF, D, with_stick):
         fd = xd[j] if stick_known and stk[j] else math.nan
         law_guard_rates(claw[j], cm[j], cN[j], cNd[j], Ndd, cv[j], vd, cf[j], fd, y,  # noqa: F821
                         law_offset(I, j), R, I, j, dy, D)  # noqa: F821
+
+
+def clamp_to_boundary(cm, I, WI, G):
+    """Guards of the contacts fired before their own root found on the side their mode forbids: set to zero.
+
+    ``first_near_crossing`` fires a contact whose root lies within the event
+    tolerance after the event, so it enters its new mode a rounding error short
+    of the boundary: closed at a penetration of -1e-21, its normal force is
+    negative and its stick guard ``mu N - |f|`` starts below zero. A crossing is a
+    change of sign, so that guard would never fire however far it fell (the
+    contact would stick with ``|f| > mu N``). Such a contact is marked
+    (``WC_NEAR``) until it fires again or its guards are all on their allowed
+    sides; meanwhile every guard evaluation that starts a step or a sub-step
+    passes here, and a guard on the wrong side counts as on the boundary: it fires
+    as soon as it falls and stays quiet if it rises. Only these contacts: a guard
+    that a regular transition leaves a rounding error on its wrong side (a slip
+    ending exactly at the friction limit) keeps its value, or two modes could
+    chatter at the same instant.
+    """
+    if WI[W_NNEAR] == 0:
+        return
+    nc = I[H_NC]
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, near = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_NEAR)  # noqa: F821
+    claw = vec(I, I, O_CLAW, nc)  # noqa: F821
+    for jj in range(nca):
+        j = ac[jj] & NONNEG
+        if near[j] == 0:
+            continue
+        K = claw[j]
+        m = cm[j]
+        wrong = False
+        for gi in range(NG[K, m]):  # noqa: F821
+            d = GDIR[K, m, gi]  # noqa: F821
+            if (d < 0 and G[j, gi] < 0.0) or (d > 0 and G[j, gi] > 0.0):
+                G[j, gi] = 0.0
+                wrong = True
+        if not wrong:
+            near[j] = 0
+            WI[W_NNEAR] -= 1
+
+
+def mark_near(WI, nc, j, fired_early):
+    """Mark contact ``j`` as fired before its root (``fired_early``) or clear its mark (``clamp_to_boundary``)."""
+    near = wvec(WI, nc, WC_NEAR)  # noqa: F821
+    if fired_early and near[j] == 0:
+        near[j] = 1
+        WI[W_NNEAR] += 1
+    elif not fired_early and near[j] != 0:
+        near[j] = 0
+        WI[W_NNEAR] -= 1
 
 
 def copy_guards(I, WI, G, Gm, D, Dm):

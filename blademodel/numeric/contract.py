@@ -96,14 +96,17 @@ W_NSA = 5      #: active state rows (a cluster's)
 W_STAMP = 6    #: the last cluster's stamp (``WC_MARK``, ``WD_MARK``)
 W_NB = 7       #: contacts on the boundary of this step's clusters (``WC_BL``)
 W_NEV = 8      #: events handled in the current step (all clusters)
-W_HEAD = 9     #: header length
+W_NNEAR = 9    #: contacts marked in ``WC_NEAR``
+W_HEAD = 10    #: header length
 #: Per-contact arrays: sticking rigid contact (0/1), first column of its row of the stick factor's
 #: envelope, contacts of the friction problem, modes before an event, modes before the friction
 #: problem, the log row of its transition in the current event, the active contacts (a cluster's,
 #: ascending), seeds of the step's clusters, cluster stamp (boundary: minus the stamp), modes at the
-#: step's start, boundary contacts, every contact (``0 ... nc - 1``: the whole model's list).
-WC_STK, WC_ENV, WC_U, WC_CM0, WC_BEFORE, WC_FIRED, WC_AC, WC_SEED, WC_MARK, WC_CMSTEP, WC_BL, WC_ALL = range(12)
-WC_COUNT = 12
+#: step's start, boundary contacts, every contact (``0 ... nc - 1``: the whole model's list), fired
+#: before its own root (``first_near_crossing``) and not yet clear of it (``clamp_to_boundary``).
+WC_STK, WC_ENV, WC_U, WC_CM0, WC_BEFORE, WC_FIRED, WC_AC, WC_SEED, WC_MARK, WC_CMSTEP, WC_BL, WC_ALL, WC_NEAR = \
+    range(13)
+WC_COUNT = 13
 #: Per-coordinate arrays: the active coordinates (a cluster's, in the order found), cluster stamp, every
 #: coordinate (``0 ... n - 1``). The state rows follow: a cluster's, then every row.
 WD_AD, WD_MARK, WD_ALL = 0, 1, 2
