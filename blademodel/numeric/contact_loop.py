@@ -170,6 +170,7 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
             eval_guards(t_sub, ysub, cm, I, R, WI, WF, Gs)  # noqa: F821
             clamp_to_boundary(cm, I, WI, Gs)  # noqa: F821
             eval_guards(t, y, cm, I, R, WI, WF, G1)  # noqa: F821
+            clamp_to_boundary(cm, I, WI, G1)  # noqa: F821
             code = first_crossing(cm, I, WI, Gs, G1)  # noqa: F821
             is_near = False
             if code < 0:
