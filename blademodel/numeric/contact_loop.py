@@ -53,7 +53,7 @@ of the penetration and of the relative slip, ``4`` per contact), ``cgap``, ``ck`
 directions, ``nc * nc``).
 
 ``WI``: a header (``W_*``: sticking contacts, the null pivot, the active set's
-kind and sizes, the cluster stamp, boundary and event counts), per-contact arrays
+kind and sizes, the cluster stamp, boundary and event counts, contacts marked ``WC_NEAR``), per-contact arrays
 (``WC_*``), per-coordinate arrays (``WD_*``), the active state rows.
 
 ``WF``: ``F`` (generalized forces), ``cN, cNd, cv, cf, cdl`` (per contact normal
