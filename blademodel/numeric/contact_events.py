@@ -144,6 +144,7 @@ def settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log
             j = ac[jj] & NONNEG
             if cm[j] == before[j]:
                 continue
+            unmark_near(j, I, WI)  # noqa: F821
             if fired[j] != 0:
                 # the guard of this very contact fired in this event: one event, to the settled mode
                 k = fired[j] - 1

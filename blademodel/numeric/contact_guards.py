@@ -8,7 +8,7 @@ unknown). The tables ``NG``, ``GDIR`` describe each law kind's guards.
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import (W_NNEAR, WC_ALL, NONNEG, F_DL, F_DR, F_FR, F_N, F_ND, F_V, F_XD, H_N, H_NC, NK_DAMPED, NK_LOAD,
+from blademodel.numeric.contract import (W_NNEAR, WC_ALL, NONNEG, F_DL, F_GOFF, F_DR, F_FR, F_N, F_ND, F_V, F_XD, H_N, H_NC, NK_DAMPED, NK_LOAD,
                                          NK_SPRING, O_CIDX, O_CLAW, O_CNK, R_CC, R_GN, R_GR, R_K, R_N0, WC_AC,
                                          WC_FIRED, WC_NEAR, WC_STK)
 
@@ -64,6 +64,8 @@ def guards_of_forces(y, cm, I, R, WI, WF, G):
         j = ac[jj] & NONNEG
         G[j, 0] = normal_guard(j, cm[j], cnk[j], cdl[j], cdr[j], cN[j], ck, cc, cn0)
         law_guards(claw[j], cm[j], cN[j], cNd[j], cv[j], cf[j], y, law_offset(I, j), R, I, j, G)  # noqa: F821
+    if WI[W_NNEAR] > 0:
+        guard_offsets(cm, I, WI, WF, G)
 
 
 def contact_rates(j, dy, n, cidx, cgn, cgr, ck):
@@ -114,53 +116,56 @@ def guard_rates(y, dy, cm, I, R, WI, WF, D, with_stick):
                         law_offset(I, j), R, I, j, dy, D)  # noqa: F821
 
 
-def clamp_to_boundary(cm, I, WI, G):
-    """Guards of the contacts fired before their own root found on the side their mode forbids: set to zero.
-
-    ``first_near_crossing`` fires a contact whose root lies within the event
-    tolerance after the event, so it enters its new mode a rounding error short
-    of the boundary: closed at a penetration of -1e-21, its normal force is
-    negative and its stick guard ``mu N - |f|`` starts below zero. A crossing is a
-    change of sign, so that guard would never fire however far it fell (the
-    contact would stick with ``|f| > mu N``). Such a contact is marked
-    (``WC_NEAR``) until it fires again or its guards are all on their allowed
-    sides; meanwhile every guard evaluation that starts a step or a sub-step
-    passes here, and a guard on the wrong side counts as on the boundary: it fires
-    as soon as it falls and stays quiet if it rises. Only these contacts: a guard
-    that a regular transition leaves a rounding error on its wrong side (a slip
-    ending exactly at the friction limit) keeps its value, or two modes could
-    chatter at the same instant.
-    """
-    if WI[W_NNEAR] == 0:
-        return
+def guard_offsets(cm, I, WI, WF, G):
+    """Shift the guards of the contacts marked ``WC_NEAR`` (still in the mode they were marked in) by their
+    offsets (``F_GOFF``)."""
     nc = I[H_NC]
     full, nca = active_contacts(WI, nc)  # noqa: F821
     ac, near = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_NEAR)  # noqa: F821
-    claw = vec(I, I, O_CLAW, nc)  # noqa: F821
+    claw, goff = vec(I, I, O_CLAW, nc), vec(WF, I, F_GOFF, nc * GMAX)  # noqa: F821
     for jj in range(nca):
         j = ac[jj] & NONNEG
-        if near[j] == 0:
+        if near[j] != cm[j] + 1:
             continue
-        K = claw[j]
-        m = cm[j]
-        wrong = False
-        for gi in range(NG[K, m]):  # noqa: F821
-            d = GDIR[K, m, gi]  # noqa: F821
-            if (d < 0 and G[j, gi] < 0.0) or (d > 0 and G[j, gi] > 0.0):
-                G[j, gi] = 0.0
-                wrong = True
-        if not wrong:
-            near[j] = 0
-            WI[W_NNEAR] -= 1
+        for gi in range(NG[claw[j], cm[j]]):  # noqa: F821
+            G[j, gi] -= goff[j * GMAX + gi]  # noqa: F821
 
 
-def mark_near(WI, nc, j, fired_early):
-    """Mark contact ``j`` as fired before its root (``fired_early``) or clear its mark (``clamp_to_boundary``)."""
-    near = wvec(WI, nc, WC_NEAR)  # noqa: F821
-    if fired_early and near[j] == 0:
-        near[j] = 1
+def mark_near(j, cm, I, WI, WF, G):
+    """Mark contact ``j``, just fired before its own root (``first_near_crossing``), with the offsets of its
+    new mode's guards ``G[j]`` at the event; ``G[j]`` is shifted by them.
+
+    Fired with another contact because its own root lies within the event tolerance
+    after the event, the contact enters its new mode a rounding error short of the
+    boundary: closed at a penetration of -8e-22 m, its normal force is negative and its
+    stick guard ``mu N - |f|`` starts below zero. A crossing is a change of sign, so that
+    guard would never fire however far it fell (the contact would stick with
+    ``|f| > mu N``). A guard found on the side its mode forbids is therefore read, until
+    the contact's next transition, minus that value (``guard_offsets``): it starts on
+    the boundary, fires as soon as it falls further and stays quiet while it returns.
+    Only such contacts: a guard that a regular transition leaves a rounding error on its
+    wrong side (a slip ending exactly at the friction limit while the contact unloads)
+    keeps its value, or two modes could chatter at one instant.
+    """
+    nc = I[H_NC]
+    near, goff = wvec(WI, nc, WC_NEAR), vec(WF, I, F_GOFF, nc * GMAX)  # noqa: F821
+    K = I[I[O_CLAW] + j]
+    m = cm[j]
+    if near[j] == 0:
         WI[W_NNEAR] += 1
-    elif not fired_early and near[j] != 0:
+    near[j] = m + 1
+    for gi in range(NG[K, m]):  # noqa: F821
+        d = GDIR[K, m, gi]  # noqa: F821
+        g = G[j, gi]
+        off = g if (d < 0 and g < 0.0) or (d > 0 and g > 0.0) else 0.0
+        goff[j * GMAX + gi] = off  # noqa: F821
+        G[j, gi] = g - off
+
+
+def unmark_near(j, I, WI):
+    """Clear contact ``j``'s ``WC_NEAR`` mark (it fired again, or the friction problem changed its mode)."""
+    near = wvec(WI, I[H_NC], WC_NEAR)  # noqa: F821
+    if near[j] != 0:
         near[j] = 0
         WI[W_NNEAR] -= 1
 

@@ -95,12 +95,13 @@ def compile_contact_kernel(model: Model):
     return out
 
 
-def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4") -> tuple[np.ndarray, np.ndarray,
-                                                                                   np.ndarray, np.ndarray]:
+def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4", gmax: int = 1) -> tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The flat arrays ``I``, ``R``, ``WI``, ``WF`` of the kernel (layout: :mod:`.contract`).
 
     ``method``: the stepping method (:mod:`.methods`); classical RK4 is written out in
-    the kernel, any other enters as its tableau.
+    the kernel, any other enters as its tableau. ``gmax``: the most guards of a
+    contact's mode (the generated module's ``GMAX``).
     """
     n, nc = tables.n, len(tables.cgap)
     m = max(nc, 1)
@@ -160,12 +161,12 @@ def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4") -> tup
               tableau, tables.cc, tables.cn0],
              [*range(contract.R_INVM, contract.R_RK + 1), contract.R_CC, contract.R_N0], np.float64, 0)
     sizes = [n] + [m] * 9 + [contract.MAX_GROUPS, contract.MAX_GROUPS, contract.MAX_LAW_STATES, n_state, m * m,
-                             m, 1, n, m, 3]
+                             m, 1, n, m, 3, m * gmax]
     WF = pack([np.zeros(k) for k in sizes],
               [contract.F_F, contract.F_N, contract.F_ND, contract.F_V, contract.F_FR, contract.F_DL, contract.F_X,
                contract.F_D, contract.F_NULL, contract.F_B, contract.F_SG, contract.F_CG, contract.F_Z,
                contract.F_YEV, contract.F_L, contract.F_DR, contract.F_T, contract.F_FD, contract.F_XD,
-               contract.F_ACC],
+               contract.F_ACC, contract.F_GOFF],
               np.float64, 0)
     WF[header[contract.F_T]] = math.nan   # the time of the forcing's sin and cos in F_SG, F_CG: none yet
     I = np.concatenate([header, ints])
@@ -260,7 +261,7 @@ class ContactIntegrator(Integrator):
         self.event_location = check_event_location(event_location)
         self.max_pivots = int(max_pivots) if max_pivots is not None else 4 * self.nc + 20
         self.method = get_method(method)
-        self.I, self.R, self.WI, self.WF = pack_tables(self.tables, self.n_state, method)
+        self.I, self.R, self.WI, self.WF = pack_tables(self.tables, self.n_state, method, self.kmeta["gmax"])
         self.SC = np.zeros((contract.SC_ROWS + max(self.method.stages - 1, 0), self.n_state))
         self.GS = np.zeros((contract.GS_ROWS, max(self.nc, 1), self.kmeta["gmax"]))
         if max([len(k["states"]) for k in self.kmeta["kinds"]] + [0]) > contract.MAX_LAW_STATES:

@@ -112,7 +112,6 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
             rhs_guards(t, y, cm, I, R, WI, WF, SC[0], G0)  # noqa: F821
             guard_rates(y, SC[0], cm, I, R, WI, WF, D0, runtime(True))  # noqa: F821
             counters[C_RHS] += 1
-            clamp_to_boundary(cm, I, WI, G0)  # noqa: F821
         if not (first and reuse):
             spent = rk_step(t, y, dt, cm, I, R, WI, WF, SC, y1, True)  # noqa: F821
             rhs_guards(t_end, y1, cm, I, R, WI, WF, knext, G1)  # noqa: F821
@@ -158,7 +157,7 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
         while code >= 0:
             j = code // GMAX  # noqa: F821
             gi = code - j * GMAX  # noqa: F821
-            mark_near(WI, nc, j, is_near)  # noqa: F821
+            unmark_near(j, I, WI)  # noqa: F821
             old = cm[j]
             cm[j] = apply_transition(t, y, cm, j, gi, I, R, WI, WF)  # noqa: F821
             log_event(t, j, gi, old, cm[j], log_t, log_c, log_g, log_from, log_to, counters, recording,  # noqa: F821
@@ -168,9 +167,9 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
                 return STATUS_EVENT_STORM, t
             factor_stick(cm, I, R, WI, WF)  # noqa: F821
             eval_guards(t_sub, ysub, cm, I, R, WI, WF, Gs)  # noqa: F821
-            clamp_to_boundary(cm, I, WI, Gs)  # noqa: F821
             eval_guards(t, y, cm, I, R, WI, WF, G1)  # noqa: F821
-            clamp_to_boundary(cm, I, WI, G1)  # noqa: F821
+            if is_near:
+                mark_near(j, cm, I, WI, WF, G1)  # noqa: F821
             code = first_crossing(cm, I, WI, Gs, G1)  # noqa: F821
             is_near = False
             if code < 0:
@@ -187,7 +186,6 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
         rhs_guards(t, y, cm, I, R, WI, WF, knext, G1)  # noqa: F821
         guard_rates(y, knext, cm, I, R, WI, WF, D1, runtime(False))  # noqa: F821
         counters[C_RHS] += 1
-        clamp_to_boundary(cm, I, WI, G1)  # noqa: F821
     return STATUS_OK, t
 
 
@@ -375,7 +373,6 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                 y[i] = y1[i]
                 SC[0, i] = knext[i]
             copy_all_guards(G0, G1, D0, D1)
-            clamp_to_boundary(cm, I, WI, G0)  # noqa: F821
             t = t_end
             if WI[W_NS] > 0:
                 stats[S_MAX_CONE_RATIO] = max(stats[S_MAX_CONE_RATIO], cone_ratio(y, I, R, WI, WF))  # noqa: F821

@@ -75,7 +75,9 @@ NK_SPRING, NK_DAMPED, NK_LOAD = 0, 1, 2
 #: each by a spring or damper (CSR ``Ap``, ``Ai``: the symmetric sparsity of ``K`` and ``C``); and (``WF``)
 #: the energy accumulators' increments of a cluster's first sub-step.
 O_FP, O_DP, O_DI, O_AP, O_AI, F_ACC = 54, 55, 56, 57, 58, 59
-H_SIZE = 60    #: header length
+#: (``WF``) the guard offsets of the contacts marked ``WC_NEAR``, ``GMAX`` per contact.
+F_GOFF = 60
+H_SIZE = 61    #: header length
 #: Rows of the kernel's stage buffer ``SC`` before the extra stages of a tableau method
 #: (row ``SC_Y0``: the state at the start of a step whose events are being handled).
 SC_ROWS = 10
@@ -103,7 +105,8 @@ W_HEAD = 10    #: header length
 #: problem, the log row of its transition in the current event, the active contacts (a cluster's,
 #: ascending), seeds of the step's clusters, cluster stamp (boundary: minus the stamp), modes at the
 #: step's start, boundary contacts, every contact (``0 ... nc - 1``: the whole model's list), fired
-#: before its own root (``first_near_crossing``) and not yet clear of it (``clamp_to_boundary``).
+#: before its own root (``first_near_crossing``): 1 + the mode it entered, whose guards are read
+#: shifted by ``F_GOFF`` (``guard_offsets``); 0 if not.
 WC_STK, WC_ENV, WC_U, WC_CM0, WC_BEFORE, WC_FIRED, WC_AC, WC_SEED, WC_MARK, WC_CMSTEP, WC_BL, WC_ALL, WC_NEAR = \
     range(13)
 WC_COUNT = 13
