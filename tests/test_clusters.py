@@ -118,3 +118,35 @@ def test_contacts_closing_in_the_same_instant_keep_their_friction_limit(local):
     contact = np.asarray(r.events["contact"])
     t0, t2 = (r.events["t"][contact == c["names"][j]][:4] for j in (0, 2))
     np.testing.assert_allclose(t0, t2, rtol=0, atol=1e-9 * r.period)   # both close, then slip, at once
+
+
+def test_marks_of_early_fired_contacts_are_a_runs_state():
+    """A contact fired before its own root reads its guards shifted until its next transition (``mark_near``).
+
+    The marks belong to the run: a run split into one call per period equals one call to the bit while marks
+    stay alive across the calls; a new start (``mode_of``, or a call from another state) forgets them.
+    """
+    from blademodel.numeric import make_integrator
+    from blademodel.numeric.contract import W_NNEAR
+
+    model = BladedDisk(blades=4, engine_order=2, friction="bilinear").build()
+    integ = make_integrator(model, steps_per_period=8000, event_tol=1e-12, local_events=False)
+    y0 = integ.initial_state()
+    m0 = integ.mode_of(y0)
+    whole = y0.copy()
+    integ.advance(whole, m0, 0, 6)
+    split, m, alive = y0.copy(), integ.mode_of(y0.copy()), []
+    for p in range(6):
+        _, m, _ = integ.advance(split, m, p, p + 1)
+        alive.append(int(integ.WI[W_NNEAR]))
+    assert any(alive[:-1]), alive           # marks carried across at least one call
+    assert_array_equal(split, whole)
+    integ.mode_of(y0.copy())
+    assert integ.WI[W_NNEAR] == 0
+    integ.advance(split, m, 6, 9)           # on from the last end: a run that ends with marks alive
+    assert integ.WI[W_NNEAR] > 0
+    a, b = y0.copy(), y0.copy()
+    integ.advance(a, m0, 0, 2)              # another state than the last call's end: a new run
+    fresh = make_integrator(model, steps_per_period=8000, event_tol=1e-12, local_events=False)
+    fresh.advance(b, fresh.mode_of(y0.copy()), 0, 2)
+    assert_array_equal(a, b)

@@ -271,6 +271,7 @@ class ContactIntegrator(Integrator):
             h_max, which = self.max_stable_step()
             check_step(self.period, self.steps_per_period, h_max, which, self.method.name)
         self._empty_log = self.log_buffer(0)
+        self._run_end = None
 
     # --- modes and states ---------------------------------------------------------------------
     def record_buffer(self, n_records: int) -> tuple:
@@ -285,12 +286,20 @@ class ContactIntegrator(Integrator):
         """
         cm = np.zeros(self.nc, dtype=np.int64)
         counters = np.zeros(N_COUNTERS, dtype=np.int64)
+        self._clear_near_marks()
         if self.nc:
             ok = self.module.initial_modes(float(t), y, cm, self.I, self.R, self.WI, self.WF, self.GS[0], counters,
                                            self.max_pivots, *self._empty_log[:2])
             if not ok:
                 raise RuntimeError("the friction problem of the initial state was not resolved")
         return cm
+
+    def _clear_near_marks(self):
+        """Forget the contacts marked as fired before their own root (``WC_NEAR``, a run's hybrid state)."""
+        o = contract.W_HEAD + contract.WC_NEAR * self.nc
+        self.WI[o:o + self.nc] = 0
+        self.WI[contract.W_NNEAR] = 0
+        self._run_end = None
 
     def log_buffer(self, n: int) -> tuple:
         """``(t, contact, guard, from, to)`` arrays for an event log of ``n`` entries."""
@@ -437,12 +446,20 @@ class ContactIntegrator(Integrator):
         if poincare is None:
             poincare = np.empty((max(end_period - (n_transient or start_period), 0), self.n_state))
         log_t, log_c, log_g, log_f, log_to = log if log is not None else self._empty_log
+        # A contact fired before its own root reads its guards shifted until its next transition
+        # (contact_guards.mark_near): hybrid state of the run, kept only where a call goes on from the
+        # state and modes where the last one ended.
+        end = self._run_end
+        if end is None or not (abs(end[0] - start_period * self.period) <= 1e-9 * self.period
+                               and np.array_equal(end[1], y) and np.array_equal(end[2], cm)):
+            self._clear_near_marks()
         status, t = self.module.integrate(
             y, cm, self.I, self.R, self.WI, self.WF, self.SC, self.GS, self.period, self.steps_per_period, int(start_period),
             int(end_period), int(start_period if n_transient is None else n_transient), int(record_every),
             self.event_tol, self.max_events_per_step, self.max_pivots, self.detect_grazing,
             self.event_location == "predicted", self.local_events, rec_t, rec_y, rec_cm, rec_N, rec_f, poincare,
             log_t, log_c, log_g, log_f, log_to, counters, stats)
+        self._run_end = (float(t), y.copy(), cm.copy()) if status == 0 else None
         return int(status), cm, float(t)
 
     # --- energy -----------------------------------------------------------------------------------
