@@ -7,7 +7,7 @@ cluster only.
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import (WC_ALL, NONNEG, C_EVENTS, C_FRICTION_PIVOTS, C_LOGGED, F_F, F_FR, F_N, F_ND, F_V, F_YEV,
+from blademodel.numeric.contract import (WC_ALL, NONNEG, C_EVENTS, F_TLAST, C_FRICTION_PIVOTS, C_LOGGED, F_F, F_FR, F_N, F_ND, F_V, F_YEV,
                                          F_Z, H_N, H_NC, MAX_LAW_STATES, O_CIDX, O_CLAW, R_GR, R_INVM, R_W,
                                          WC_AC, WC_BEFORE, WC_CM0, WC_FIRED, WC_U)
 
@@ -145,6 +145,7 @@ def settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log
             if cm[j] == before[j]:
                 continue
             unmark_near(j, I, WI)  # noqa: F821
+            WF[I[F_TLAST] + j] = t
             if fired[j] != 0:
                 # the guard of this very contact fired in this event: one event, to the settled mode
                 k = fired[j] - 1

@@ -8,7 +8,7 @@ unknown). The tables ``NG``, ``GDIR`` describe each law kind's guards.
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import (W_NNEAR, WC_ALL, NONNEG, F_DL, F_GOFF, F_DR, F_FR, F_N, F_ND, F_V, F_XD, H_N, H_NC, NK_DAMPED, NK_LOAD,
+from blademodel.numeric.contract import (W_NNEAR, WC_ALL, WC_SUSPECT, NONNEG, F_DL, F_GOFF, F_TLAST, F_NOISE, F_DR, F_FR, F_N, F_ND, F_V, F_XD, H_N, H_NC, NK_DAMPED, NK_LOAD,
                                          NK_SPRING, O_CIDX, O_CLAW, O_CNK, R_CC, R_GN, R_GR, R_K, R_N0, WC_AC,
                                          WC_FIRED, WC_NEAR, WC_STK)
 
@@ -151,6 +151,7 @@ def mark_near(j, cm, I, WI, WF, G):
     near, goff = wvec(WI, nc, WC_NEAR), vec(WF, I, F_GOFF, nc * GMAX)  # noqa: F821
     K = I[I[O_CLAW] + j]
     m = cm[j]
+    again = near[j] == m + 1   # marked in this mode already: G[j] is read shifted, the offsets add up
     if near[j] == 0:
         WI[W_NNEAR] += 1
     near[j] = m + 1
@@ -158,8 +159,82 @@ def mark_near(j, cm, I, WI, WF, G):
         d = GDIR[K, m, gi]  # noqa: F821
         g = G[j, gi]
         off = g if (d < 0 and g < 0.0) or (d > 0 and g > 0.0) else 0.0
-        goff[j * GMAX + gi] = off  # noqa: F821
+        goff[j * GMAX + gi] = goff[j * GMAX + gi] + off if again else off  # noqa: F821
         G[j, gi] = g - off
+
+
+def mark_suspects(t, cm, I, WI, WF, G0, G1, window):
+    """Mark the sub-step's suspects: the active contacts that changed mode at most ``window`` before its
+    start ``t`` and none of whose guards crossed from ``G0`` to ``G1`` over it.
+
+    Such a contact can sit on a guard with zero value and zero rate: a Jenkins slip that
+    ends as its spring unloads starts the stick guard ``mu N + kd z`` at 0 with rate 0.
+    Its sign is then a rounding error, and in a bracket 1e-17 s long (a neighbour's
+    event) it can read +1e-20 at one end and -1e-20 at the other; coincident events
+    1e-17 s apart can bring several such brackets in a row. So a suspect's crossing
+    found in a bracket that ends within ``window`` (``SUSPECT_WINDOW`` event
+    tolerances) of its transition is passed over (``suspects_at``). A real one either
+    shows over the whole sub-step (a contact that closes and at once slips is no
+    suspect) or later in it (a slip shorter than a step, found by the grazing check),
+    and one left on its wrong side at an event is put on the boundary
+    (``settle_suspects``), so that a later fall still fires.
+    """
+    nc = I[H_NC]
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, sus = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_SUSPECT)  # noqa: F821
+    claw, tlast, noise = vec(I, I, O_CLAW, nc), vec(WF, I, F_TLAST, nc), vec(WF, I, F_NOISE, nc)  # noqa: F821
+    for jj in range(nca):
+        j = ac[jj] & NONNEG
+        recent = t - tlast[j] <= window   # False while NaN (no transition yet)
+        sus[j] = 1 if recent and contact_crossing(j, cm[j], claw[j], G0, G1) < 0 else 0
+        noise[j] = tlast[j] + window
+
+
+def suspects_at(tb, I, WI, WF):
+    """Activate (2) the suspects whose crossings in a bracket ending at ``tb`` are noise; the others are 1."""
+    nc = I[H_NC]
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, sus = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_SUSPECT)  # noqa: F821
+    noise = vec(WF, I, F_NOISE, nc)  # noqa: F821
+    for jj in range(nca):
+        j = ac[jj] & NONNEG
+        if sus[j] != 0:
+            sus[j] = 2 if tb <= noise[j] else 1
+
+
+#: How long after its own transition a contact's crossings inside a sub-step may be rounding noise, in
+#: event tolerances (``mark_suspects``).
+SUSPECT_WINDOW = 64.0
+
+
+def settle_suspects(cm, I, WI, WF, G):
+    """At an event: suspects left on a wrong side of their guards ``G`` are put on the boundary
+    (``mark_near``); the marks ``WC_SUSPECT`` are cleared."""
+    nc = I[H_NC]
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, sus = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_SUSPECT)  # noqa: F821
+    claw = vec(I, I, O_CLAW, nc)  # noqa: F821
+    for jj in range(nca):
+        j = ac[jj] & NONNEG
+        if sus[j] == 0:
+            continue
+        sus[j] = 0
+        K = claw[j]
+        m = cm[j]
+        for gi in range(NG[K, m]):  # noqa: F821
+            d = GDIR[K, m, gi]  # noqa: F821
+            if (d < 0 and G[j, gi] < 0.0) or (d > 0 and G[j, gi] > 0.0):
+                mark_near(j, cm, I, WI, WF, G)
+                break
+
+
+def clear_suspects(I, WI):
+    """Clear ``WC_SUSPECT`` on the active contacts."""
+    nc = I[H_NC]
+    full, nca = active_contacts(WI, nc)  # noqa: F821
+    ac, sus = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_SUSPECT)  # noqa: F821
+    for jj in range(nca):
+        sus[ac[jj] & NONNEG] = 0
 
 
 def unmark_near(j, I, WI):
@@ -205,15 +280,17 @@ def first_crossing(cm, I, WI, G0, G1):
 
     Contacts whose transition fired in the current event are passed over: their law
     has settled them, and their new mode's guards compared across the bracket mean
-    nothing (outside an event no contact is marked).
+    nothing (outside an event no contact is marked). So are the sub-step's suspects
+    (``mark_suspects``).
     """
     nc = I[H_NC]
     full, nca = active_contacts(WI, nc)  # noqa: F821
     ac, fired = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_FIRED)  # noqa: F821
+    sus = wvec(WI, nc, WC_SUSPECT)  # noqa: F821
     claw = vec(I, I, O_CLAW, nc)  # noqa: F821
     for jj in range(nca):
         j = ac[jj] & NONNEG
-        if fired[j] != 0:
+        if fired[j] != 0 or sus[j] == 2:
             continue
         gi = contact_crossing(j, cm[j], claw[j], G0, G1)
         if gi >= 0:
@@ -227,11 +304,13 @@ def earliest_crossing(cm, I, WI, Glo, G1, Dlo, D1, lo, hi, dt):
     nc = I[H_NC]
     full, nca = active_contacts(WI, nc)  # noqa: F821
     ac = wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
-    claw = vec(I, I, O_CLAW, nc)  # noqa: F821
+    claw, sus = vec(I, I, O_CLAW, nc), wvec(WI, nc, WC_SUSPECT)  # noqa: F821
     best = -1
     xbest = hi
     for jj in range(nca):
         j = ac[jj] & NONNEG
+        if sus[j] == 2:
+            continue
         K = claw[j]
         m = cm[j]
         for gi in range(NG[K, m]):  # noqa: F821
@@ -258,10 +337,11 @@ def first_near_crossing(cm, I, WI, Gs, G1, span, tol):
     nc = I[H_NC]
     full, nca = active_contacts(WI, nc)  # noqa: F821
     ac, fired = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_FIRED)  # noqa: F821
+    sus = wvec(WI, nc, WC_SUSPECT)  # noqa: F821
     claw = vec(I, I, O_CLAW, nc)  # noqa: F821
     for jj in range(nca):
         j = ac[jj] & NONNEG
-        if fired[j] != 0:
+        if fired[j] != 0 or sus[j] == 2:
             continue
         K = claw[j]
         m = cm[j]

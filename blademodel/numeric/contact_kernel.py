@@ -161,12 +161,12 @@ def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4", gmax: 
               tableau, tables.cc, tables.cn0],
              [*range(contract.R_INVM, contract.R_RK + 1), contract.R_CC, contract.R_N0], np.float64, 0)
     sizes = [n] + [m] * 9 + [contract.MAX_GROUPS, contract.MAX_GROUPS, contract.MAX_LAW_STATES, n_state, m * m,
-                             m, 1, n, m, 3, m * gmax]
+                             m, 1, n, m, 3, m * gmax, m, m]
     WF = pack([np.zeros(k) for k in sizes],
               [contract.F_F, contract.F_N, contract.F_ND, contract.F_V, contract.F_FR, contract.F_DL, contract.F_X,
                contract.F_D, contract.F_NULL, contract.F_B, contract.F_SG, contract.F_CG, contract.F_Z,
                contract.F_YEV, contract.F_L, contract.F_DR, contract.F_T, contract.F_FD, contract.F_XD,
-               contract.F_ACC, contract.F_GOFF],
+               contract.F_ACC, contract.F_GOFF, contract.F_TLAST, contract.F_NOISE],
               np.float64, 0)
     WF[header[contract.F_T]] = math.nan   # the time of the forcing's sin and cos in F_SG, F_CG: none yet
     I = np.concatenate([header, ints])
@@ -295,10 +295,15 @@ class ContactIntegrator(Integrator):
         return cm
 
     def _clear_near_marks(self):
-        """Forget the contacts marked as fired before their own root (``WC_NEAR``, a run's hybrid state)."""
+        """Forget the contacts marked as fired before their own root (``WC_NEAR``) and the times of the last
+        transitions (``F_TLAST``): a run's hybrid state."""
         o = contract.W_HEAD + contract.WC_NEAR * self.nc
         self.WI[o:o + self.nc] = 0
         self.WI[contract.W_NNEAR] = 0
+        o = contract.W_HEAD + contract.WC_SUSPECT * self.nc
+        self.WI[o:o + self.nc] = 0
+        o = self.I[contract.F_TLAST]
+        self.WF[o:o + self.nc] = math.nan
         self._run_end = None
 
     def log_buffer(self, n: int) -> tuple:

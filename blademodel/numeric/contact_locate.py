@@ -26,6 +26,7 @@ def locate_trial(t, y, dt, frac, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counter
     guard_rates(ymid, SC[4], cm, I, R, WI, WF, Dm, runtime(True))  # noqa: F821
     counters[C_LOCATION_SUBSTEPS] += 1
     counters[C_RHS] += spent + 1
+    suspects_at(t + frac * dt, I, WI, WF)  # noqa: F821
     return first_crossing(cm, I, WI, G0, Gm)  # noqa: F821
 
 
@@ -54,6 +55,7 @@ def locate_event(t, y, dt, cm, I, R, WI, WF, SC, GS, width, predicted, counters)
     copy_guards(I, WI, Glo, G0, Dlo, D0)
     lo = 0.0
     hi = 1.0
+    suspects_at(t + dt, I, WI, WF)  # noqa: F821
     code, x = earliest_crossing(cm, I, WI, Glo, G1, Dlo, D1, lo, hi, dt)  # noqa: F821
     if code < 0:
         code = first_crossing(cm, I, WI, G0, G1)  # noqa: F821

@@ -64,7 +64,9 @@ by contact), ``nullv`` (its null vector), ``bst`` (stick right-hand side), ``sg,
 (state at an event before the friction problem), ``cdr`` (penetration rates),
 ``tsc`` (the time of ``sg, cg``; NaN when none), ``Fd`` and ``xd`` (rates of the
 generalized forces and of the stick forces, for the stick guards' rates at an
-event), ``acc`` (a cluster's share of the energy accumulators over the whole step).
+event), ``acc`` (a cluster's share of the energy accumulators over the whole step), ``goff`` (guard offsets of
+the contacts marked ``WC_NEAR``), ``tlast`` (each contact's last transition) and ``noise`` (until when a
+suspect's crossings are rounding noise, ``mark_suspects``).
 
 ``integrate`` also takes ``SC`` (``(SC_ROWS + s - 1, n_state)``: RK4 stages 0-4,
 the step's or bracket's end 5, the trial 6, the sub-step start 7, ``dy/dt`` at the
@@ -79,6 +81,7 @@ and the guards and rates at the start of a step whose events are handled, 9 and
 import math  # noqa: F401
 
 from blademodel.numeric.contract import (C_CLUSTERS, C_RESTARTS, C_EVENTS, C_GRAZING, C_LOGGED, C_RECORDS, C_RHS, C_STEPS, F_ACC, F_FR,
+                                         F_TLAST,
                                          F_N, H_N, H_NC, H_NLAW, S_MAX_CONE_RATIO, SC_Y0, STATUS_EVENT_STORM,
                                          STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE, STATUS_OK, W_NB, W_NEV,
                                          W_NS, W_STAMP, WC_CM0, WC_CMSTEP, WC_FIRED, WC_SEED)
@@ -122,6 +125,7 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
                 acc[k] = y1[n_law + k] - y[n_law + k]
         first = False
         code = first_crossing(cm, I, WI, G0, G1)  # noqa: F821
+        mark_suspects(t, cm, I, WI, WF, G0, G1, SUSPECT_WINDOW * tol_t)  # noqa: F821
         if code >= 0 and stick_rates_known(I, WI):  # noqa: F821
             # the stick guards' rates at both ends (kept without them on a step with no event)
             guard_rates(y1, knext, cm, I, R, WI, WF, D1, runtime(True))  # noqa: F821
@@ -140,6 +144,7 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
                     copy_guards(I, WI, G1, Gm, D1, Dm)  # noqa: F821
                     counters[C_GRAZING] += 1
         if code < 0:
+            clear_suspects(I, WI)  # noqa: F821
             copy_rows(WI, nc, n, y, y1)  # noqa: F821
             copy_rows(WI, nc, n, SC[0], knext)  # noqa: F821
             copy_guards(I, WI, G0, G1, D0, D1)  # noqa: F821
@@ -148,10 +153,12 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
             t = t_end
             break
         hi = locate_event(t, y, sub, cm, I, R, WI, WF, SC, GS, tol_t / sub, predicted, counters)  # noqa: F821
+        t_ev = t_end if hi == 1.0 and sub == dt else t + hi * sub
+        suspects_at(t_ev, I, WI, WF)  # noqa: F821
         code = first_crossing(cm, I, WI, G0, G1)  # noqa: F821
         t_sub = t
         copy_rows(WI, nc, n, ysub, y)  # noqa: F821
-        t = t_end if hi == 1.0 and sub == dt else t + hi * sub
+        t = t_ev
         copy_rows(WI, nc, n, y, y1)  # noqa: F821
         is_near = False
         while code >= 0:
@@ -160,6 +167,7 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
             unmark_near(j, I, WI)  # noqa: F821
             old = cm[j]
             cm[j] = apply_transition(t, y, cm, j, gi, I, R, WI, WF)  # noqa: F821
+            WF[I[F_TLAST] + j] = t
             log_event(t, j, gi, old, cm[j], log_t, log_c, log_g, log_from, log_to, counters, recording,  # noqa: F821
                       fired)
             WI[W_NEV] += 1
@@ -175,6 +183,7 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
             if code < 0:
                 code = first_near_crossing(cm, I, WI, Gs, G1, t - t_sub, tol_t)  # noqa: F821
                 is_near = code >= 0
+        settle_suspects(cm, I, WI, WF, G1)  # noqa: F821
         if not settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log_g,  # noqa: F821
                             log_from, log_to, recording):
             return STATUS_FRICTION_UNRESOLVED, t

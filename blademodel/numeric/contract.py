@@ -75,9 +75,10 @@ NK_SPRING, NK_DAMPED, NK_LOAD = 0, 1, 2
 #: each by a spring or damper (CSR ``Ap``, ``Ai``: the symmetric sparsity of ``K`` and ``C``); and (``WF``)
 #: the energy accumulators' increments of a cluster's first sub-step.
 O_FP, O_DP, O_DI, O_AP, O_AI, F_ACC = 54, 55, 56, 57, 58, 59
-#: (``WF``) the guard offsets of the contacts marked ``WC_NEAR``, ``GMAX`` per contact.
-F_GOFF = 60
-H_SIZE = 61    #: header length
+#: (``WF``) the guard offsets of the contacts marked ``WC_NEAR``, ``GMAX`` per contact; the time of each
+#: contact's last change of mode (NaN: none in this run); until when a suspect's crossings are noise.
+F_GOFF, F_TLAST, F_NOISE = 60, 61, 62
+H_SIZE = 63    #: header length
 #: Rows of the kernel's stage buffer ``SC`` before the extra stages of a tableau method
 #: (row ``SC_Y0``: the state at the start of a step whose events are being handled).
 SC_ROWS = 10
@@ -107,9 +108,12 @@ W_HEAD = 10    #: header length
 #: step's start, boundary contacts, every contact (``0 ... nc - 1``: the whole model's list), fired
 #: before its own root (``first_near_crossing``): 1 + the mode it entered, whose guards are read
 #: shifted by ``F_GOFF`` (``guard_offsets``); 0 if not.
-WC_STK, WC_ENV, WC_U, WC_CM0, WC_BEFORE, WC_FIRED, WC_AC, WC_SEED, WC_MARK, WC_CMSTEP, WC_BL, WC_ALL, WC_NEAR = \
-    range(13)
-WC_COUNT = 13
+#: Last, suspects of a sub-step (``mark_suspects``): contacts that changed mode just before its start and
+#: whose guards did not cross over it: 1, and 2 while a crossing found in the bracket under test is rounding
+#: noise (``suspects_at``).
+WC_STK, WC_ENV, WC_U, WC_CM0, WC_BEFORE, WC_FIRED, WC_AC, WC_SEED, WC_MARK, WC_CMSTEP, WC_BL, WC_ALL, WC_NEAR, \
+    WC_SUSPECT = range(14)
+WC_COUNT = 14
 #: Per-coordinate arrays: the active coordinates (a cluster's, in the order found), cluster stamp, every
 #: coordinate (``0 ... n - 1``). The state rows follow: a cluster's, then every row.
 WD_AD, WD_MARK, WD_ALL = 0, 1, 2
