@@ -9,8 +9,8 @@ Three kinds of reference are checked:
 * the model statement, ``MODEL.md section 8`` / ``MODEL.md §4.2``: the file is
   ``docs/MODEL.md`` and the numbered section must exist in it.
 
-and no file may point outside the checkout (``../shared``, absolute paths of
-this machine).
+and no file may point outside the checkout (the hand-over folder beside it, absolute
+paths of this machine; ``OUTSIDE``).
 """
 
 import re

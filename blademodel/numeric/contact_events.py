@@ -7,9 +7,9 @@ cluster only.
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import (WC_ALL, NONNEG, C_EVENTS, F_TLAST, C_FRICTION_PIVOTS, C_LOGGED, F_F, F_FR, F_N, F_ND, F_V, F_YEV,
-                                         F_Z, H_N, H_NC, MAX_LAW_STATES, O_CIDX, O_CLAW, R_GR, R_INVM, R_W,
-                                         WC_AC, WC_BEFORE, WC_CM0, WC_FIRED, WC_U)
+from blademodel.numeric.contract import (WC_ALL, NONNEG, C_EVENTS, C_FRICTION_PIVOTS, C_LOGGED, F_F, F_FR, F_N, F_ND,
+                                         F_TLAST, F_V, F_YEV, F_Z, H_N, H_NC, MAX_LAW_STATES, O_CIDX, O_CLAW, R_GR,
+                                         R_INVM, R_W, WC_AC, WC_BEFORE, WC_CM0, WC_FIRED, WC_U)
 
 #: Relative tolerance on the sign of a slipping contact's acceleration in the friction problem.
 SLIP_SIGN_TOL = 1e-9

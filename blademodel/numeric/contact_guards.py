@@ -8,9 +8,10 @@ unknown). The tables ``NG``, ``GDIR`` describe each law kind's guards.
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import (W_NNEAR, WC_ALL, WC_SUSPECT, NONNEG, F_DL, F_GOFF, F_TLAST, F_NOISE, F_DR, F_FR, F_N, F_ND, F_V, F_XD, H_N, H_NC, NK_DAMPED, NK_LOAD,
-                                         NK_SPRING, O_CIDX, O_CLAW, O_CNK, R_CC, R_GN, R_GR, R_K, R_N0, WC_AC,
-                                         WC_FIRED, WC_NEAR, WC_STK)
+from blademodel.numeric.contract import (F_DL, F_DR, F_FR, F_GOFF, F_N, F_ND, F_NOISE, F_TLAST, F_V, F_XD, H_N, H_NC,
+                                         NK_DAMPED, NK_LOAD, NK_SPRING, NONNEG, O_CIDX, O_CLAW, O_CNK, R_CC, R_GN,
+                                         R_GR, R_K, R_N0, W_NNEAR, WC_AC, WC_ALL, WC_FIRED, WC_NEAR, WC_STK,
+                                         WC_SUSPECT)
 
 
 def normal_guard(j, mode, nk, dl, dd, N, ck, cc, cn0):
@@ -131,6 +132,11 @@ def guard_offsets(cm, I, WI, WF, G):
             G[j, gi] -= goff[j * GMAX + gi]  # noqa: F821
 
 
+def wrong_side(g, d):
+    """Whether a guard of value ``g`` and crossing direction ``d`` lies on the side its mode forbids."""
+    return (d < 0 and g < 0.0) or (d > 0 and g > 0.0)
+
+
 def mark_near(j, cm, I, WI, WF, G):
     """Mark contact ``j``, just fired before its own root (``first_near_crossing``), with the offsets of its
     new mode's guards ``G[j]`` at the event; ``G[j]`` is shifted by them.
@@ -156,9 +162,8 @@ def mark_near(j, cm, I, WI, WF, G):
         WI[W_NNEAR] += 1
     near[j] = m + 1
     for gi in range(NG[K, m]):  # noqa: F821
-        d = GDIR[K, m, gi]  # noqa: F821
         g = G[j, gi]
-        off = g if (d < 0 and g < 0.0) or (d > 0 and g > 0.0) else 0.0
+        off = g if wrong_side(g, GDIR[K, m, gi]) else 0.0  # noqa: F821
         goff[j * GMAX + gi] = goff[j * GMAX + gi] + off if again else off  # noqa: F821
         G[j, gi] = g - off
 
@@ -222,8 +227,7 @@ def settle_suspects(cm, I, WI, WF, G):
         K = claw[j]
         m = cm[j]
         for gi in range(NG[K, m]):  # noqa: F821
-            d = GDIR[K, m, gi]  # noqa: F821
-            if (d < 0 and G[j, gi] < 0.0) or (d > 0 and G[j, gi] > 0.0):
+            if wrong_side(G[j, gi], GDIR[K, m, gi]):  # noqa: F821
                 mark_near(j, cm, I, WI, WF, G)
                 break
 

@@ -81,8 +81,7 @@ and the guards and rates at the start of a step whose events are handled, 9 and
 import math  # noqa: F401
 
 from blademodel.numeric.contract import (C_CLUSTERS, C_RESTARTS, C_EVENTS, C_GRAZING, C_LOGGED, C_RECORDS, C_RHS, C_STEPS, F_ACC, F_FR,
-                                         F_TLAST,
-                                         F_N, H_N, H_NC, H_NLAW, S_MAX_CONE_RATIO, SC_Y0, STATUS_EVENT_STORM,
+                                         F_TLAST, F_N, H_N, H_NC, H_NLAW, S_MAX_CONE_RATIO, SC_Y0, STATUS_EVENT_STORM,
                                          STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE, STATUS_OK, W_NB, W_NEV,
                                          W_NS, W_STAMP, WC_CM0, WC_CMSTEP, WC_FIRED, WC_SEED)
 
