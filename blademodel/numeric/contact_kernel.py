@@ -402,7 +402,7 @@ class ContactIntegrator(Integrator):
     # --- integration ------------------------------------------------------------------------------
     def advance(self, y: np.ndarray, mode, start_period: int, end_period: int, *, n_transient: int | None = None,
                 record=None, forces=None, poincare=None, log=None, counters=None, stats=None,
-                record_every: int = 1) -> tuple[int, np.ndarray, float]:
+                record_every: int = 1, check: bool = True) -> tuple[int, np.ndarray, float]:
         """Integrate periods ``start_period`` to ``end_period``; ``y`` is updated in place.
 
         Parameters
@@ -421,6 +421,9 @@ class ContactIntegrator(Integrator):
             ``contract.N_COUNTERS`` counters, accumulated.
         stats : ndarray of float, optional
             ``contract.N_STATS`` statistics (``max_cone_ratio``), accumulated.
+        check : bool
+            Validate the arguments first; only a caller whose arrays come from this
+            integrator and whose mode it returned may skip it (the period map).
 
         Returns
         -------
@@ -433,8 +436,9 @@ class ContactIntegrator(Integrator):
             (:func:`~blademodel.numeric.integrator.check_advance_arguments`).
         """
         from .integrator import check_advance_arguments
-        check_advance_arguments(self, y, mode, start_period, end_period, n_transient, record=record, poincare=poincare,
-                                log=log, counters=counters, record_every=record_every, stats=stats, forces=forces)
+        if check:
+            check_advance_arguments(self, y, mode, start_period, end_period, n_transient, record=record, poincare=poincare,
+                                    log=log, counters=counters, record_every=record_every, stats=stats, forces=forces)
         cm = np.array(mode, dtype=np.int64).reshape(self.nc)
         if y.shape != (self.n_state,):
             raise ValueError(f"y has shape {y.shape}, expected ({self.n_state},)")

@@ -13,7 +13,7 @@ from ..model import Model
 from .compiled import compile_model
 from .contract import N_COUNTERS
 from .methods import get_method
-from .stability import check_step, max_stable_step, step_is_stable
+from .stability import certain_step, check_step, max_stable_step, mode_eigenvalues, step_is_stable
 
 
 
@@ -80,11 +80,11 @@ def _what(a) -> str:
 
 def _check_array(name: str, a, template: np.ndarray, rows: int | None) -> int:
     """``a`` matches ``template``'s dtype and trailing shape, writable, C-contiguous, with ``>= rows`` rows."""
-    want = f"a writable C-contiguous {template.dtype} array of shape ({'n' if rows is None else f'>= {rows}'}" \
-           + "".join(f", {k}" for k in template.shape[1:]) + ("," if template.ndim == 1 else "") + ")"
     if not (isinstance(a, np.ndarray) and a.dtype == template.dtype and a.ndim == template.ndim
             and a.shape[1:] == template.shape[1:] and a.flags.c_contiguous and a.flags.writeable
             and (rows is None or a.shape[0] >= rows)):
+        want = f"a writable C-contiguous {template.dtype} array of shape ({'n' if rows is None else f'>= {rows}'}" \
+               + "".join(f", {k}" for k in template.shape[1:]) + ("," if template.ndim == 1 else "") + ")"
         raise ValueError(f"advance: {name} must be {want}, got {_what(a)}")
     return a.shape[0]
 
@@ -249,6 +249,7 @@ class HybridIntegrator(Integrator):
         self.n_state = self.meta["n_state"]
         self.n_physical = self.n_state - (3 if energy else 0)
         self._check_step()
+        self._eig_cache: dict = {}   # shared by the copies of with_parameter_values
         self._g = np.empty(self.module.GUARD_DIR.shape[1] + 1)
         self._ytmp = np.empty(self.n_state)
         self._empty_rec = (np.empty(0), np.empty((0, self.n_state)), np.empty(0, dtype=np.int64))
@@ -282,21 +283,68 @@ class HybridIntegrator(Integrator):
         if model.structure_key() != self.model.structure_key():
             raise StructureMismatch("with_parameters needs a model of the same structure "
                                     "(only parameter values may differ)")
-        new = copy.copy(self)
+        new = self.with_parameter_values([model.parameters[n] for n in self.meta["params"]],
+                                         None if self._explicit_period else excitation_period(model))
         new.model = model
-        new.p_raw = np.array([model.parameters[n] for n in self.meta["params"]], dtype=float)
-        new.p = self.module.derived(new.p_raw)
-        if not self._explicit_period:
-            new.period = excitation_period(model)
+        return new
+
+    def with_parameter_values(self, p_raw, period: float | None = None) -> "HybridIntegrator":
+        """This integrator with the raw parameter values ``p_raw`` (in ``meta["params"]`` order).
+
+        The cheap form of :meth:`with_parameters` for callers that know the values
+        already (continuation, which moves one config field at every correction): no
+        model is built or compared. ``period`` is the new excitation period (ignored
+        if the period was given explicitly; ``None`` keeps it). The copy's ``model``
+        stays the one this integrator was built from: its structure, not these
+        values. The step's stability is checked as in :meth:`with_parameters`; the
+        modes' eigenvalues depend only on the parameters in their Jacobians
+        (``JACOBIAN_PARAMS`` of the generated module), and are computed once for each
+        set of their values and shared by every copy.
+
+        Raises
+        ------
+        ValueError
+            If ``p_raw`` does not hold one finite value per parameter.
+        StepTooLargeError
+            If the step is unstable with the new parameters.
+        """
+        p_raw = np.array(p_raw, dtype=float)
+        if p_raw.shape != self.p_raw.shape or not np.all(np.isfinite(p_raw)):
+            raise ValueError(f"p_raw must hold {self.p_raw.size} finite values (one per parameter: "
+                             f"{', '.join(self.meta['params'])}), got {p_raw!r}")
+        new = copy.copy(self)
+        new.p_raw = p_raw
+        new.p = self.module.derived(p_raw.tolist())   # Python floats: the generated formulas run twice as fast
+        if period is not None and not self._explicit_period:
+            new.period = float(period)
         new._g = np.empty_like(self._g)
         new._ytmp = np.empty_like(self._ytmp)
         if self._check_stability:
             # the step itself inside the stability region in every mode settles it; the limit
             # (a bisection on each eigenvalue's ray) is only needed for the error message
-            if not step_is_stable(new.period / new.steps_per_period, self.module.jacobian, len(self.meta["modes"]),
-                                  new.p_raw, self.n_physical, self.method.amplification):
+            h = new.period / new.steps_per_period
+            lam, h_certain = new._eigenvalues()
+            if h > h_certain and not step_is_stable(h, lam, self.method.amplification):
                 new._check_step()
         return new
+
+    def _eigenvalues(self) -> tuple[np.ndarray, float]:
+        """Every mode's :func:`~blademodel.numeric.stability.physical_eigenvalues` at this integrator's parameters,
+        and the step below which all of them are certainly stable (:func:`~blademodel.numeric.stability.certain_step`)."""
+        used = getattr(self.module, "JACOBIAN_PARAMS", None)
+        key = None if used is None else tuple(self.p_raw[list(used)].tolist())
+        found = self._eig_cache.get(key) if key is not None else None
+        if found is None:
+            lam = mode_eigenvalues(self.module.jacobian, len(self.meta["modes"]), self.p_raw, self.n_physical)[0]
+            h = certain_step(lam, self.method.amplification_coefficients()) * (1.0 - 1e-9)
+            if np.isfinite(h) and not step_is_stable(h, lam, self.method.amplification):
+                h = 0.0   # the roots were not accurate enough: every step is checked by evaluation
+            found = (lam, h)
+            if key is not None:
+                if len(self._eig_cache) > 64:
+                    self._eig_cache.clear()
+                self._eig_cache[key] = found
+        return found
 
     @property
     def mode_names(self) -> list[str]:
@@ -333,7 +381,7 @@ class HybridIntegrator(Integrator):
 
     def advance(self, y: np.ndarray, mode: int, start_period: int, end_period: int, *,
                 n_transient: int | None = None, record=None, poincare=None, log=None,
-                counters=None, record_every: int = 1) -> tuple[int, int, float]:
+                counters=None, record_every: int = 1, check: bool = True) -> tuple[int, int, float]:
         """Integrate periods ``start_period`` to ``end_period``; ``y`` is updated in place.
 
         Parameters
@@ -354,6 +402,12 @@ class HybridIntegrator(Integrator):
             Accumulates steps, events, location sub-steps, rhs evaluations, log and record
             positions; pass the same array to consecutive calls.
 
+        check : bool
+            Validate the arguments first (:func:`check_advance_arguments`: ~0.06 ms). Only
+            a caller whose arrays come from this integrator (``initial_state``,
+            ``record_buffer``, ``log_buffer``) and whose mode it returned may skip it
+            (the period map, which runs the kernel for every correction).
+
         Returns
         -------
         status, mode, t : int, int, float
@@ -363,8 +417,9 @@ class HybridIntegrator(Integrator):
         ValueError
             For an argument the kernel cannot take (:func:`check_advance_arguments`).
         """
-        check_advance_arguments(self, y, mode, start_period, end_period, n_transient, record=record,
-                                poincare=poincare, log=log, counters=counters, record_every=record_every)
+        if check:
+            check_advance_arguments(self, y, mode, start_period, end_period, n_transient, record=record,
+                                    poincare=poincare, log=log, counters=counters, record_every=record_every)
         if counters is None:
             counters = np.zeros(N_COUNTERS, dtype=np.int64)
         rec_t, rec_y, rec_mode = record if record is not None else self._empty_rec

@@ -14,7 +14,13 @@ from ..symbolic.system import HybridSystem
 
 
 def jacobians(system: HybridSystem) -> str:
-    """Source of ``jacobian(mode, p) -> ndarray`` (raw parameter vector ``p``)."""
+    """Source of ``jacobian(mode, p) -> ndarray`` (raw parameter vector ``p``) and of ``JACOBIAN_PARAMS``.
+
+    ``JACOBIAN_PARAMS`` holds the indices of the raw parameters that some mode's
+    Jacobian depends on: a change of the others (the forcing's amplitude and
+    frequency, a gap) leaves every mode's eigenvalues as they were, so the
+    stability check can reuse them (:meth:`~blademodel.numeric.integrator.HybridIntegrator.with_parameters`).
+    """
     state = system.state
     at_rest = {s: 0 for s in state}
     at_rest[system.t] = 0
@@ -26,6 +32,7 @@ def jacobians(system: HybridSystem) -> str:
 
     pr = Printer({"fully_qualified_modules": True})
     n = len(state)
+    used: set = set()
     lines = ["def jacobian(mode, p):", f"    J = np.zeros(({n}, {n}))"]
     for m, mode in enumerate(system.modes):
         lines.append(f"    {'if' if m == 0 else 'elif'} mode == {m}:")
@@ -36,7 +43,10 @@ def jacobians(system: HybridSystem) -> str:
                 d = sp.diff(f, s)
                 if d != 0:
                     d = d.subs(at_rest)
+                    used |= d.free_symbols
                     body.append(f"        J[{i}, {j}] = {pr.doprint(d)}")
         lines += body or ["        pass"]
     lines.append("    return J")
+    lines.append("")
+    lines.append(f"JACOBIAN_PARAMS = {tuple(i for i, p in enumerate(system.params) if p in used)!r}")
     return "\n".join(lines) + "\n"

@@ -50,6 +50,10 @@ class Method:
         """Stability function ``R(z) = 1 + sum_k (b^T A^(k-1) 1) z^k`` (a polynomial: the method is explicit)."""
         return np.polyval(self._highest_first, np.asarray(z, dtype=complex))
 
+    def amplification_coefficients(self) -> np.ndarray:
+        """The coefficients of :meth:`amplification`, lowest power first (``1, 1, 1/2, ...``)."""
+        return self._highest_first[::-1].copy()
+
     def tableau(self) -> np.ndarray:
         """``A`` (row by row), ``b`` and ``c`` in one flat array, as the kernels read them."""
         return np.concatenate([self.A.ravel(), self.b, self.c]).astype(float)

@@ -81,11 +81,41 @@ def mode_eigenvalues(jacobian, n_modes: int, p: np.ndarray, n_state: int) -> tup
     return np.concatenate(lams or [np.zeros(0)]), np.concatenate(owner or [np.zeros(0, dtype=int)])
 
 
-def step_is_stable(h: float, jacobian, n_modes: int, p: np.ndarray, n_state: int,
-                   amplification=rk4_amplification) -> bool:
-    """Whether ``|R(h lam)| <= 1`` for every mode's eigenvalues: one evaluation, no limit sought."""
-    lam = mode_eigenvalues(jacobian, n_modes, p, n_state)[0]
-    return bool(np.all(np.abs(amplification(h * lam)) <= 1.0 + 1e-12))
+def certain_step(lam, coefficients) -> float:
+    """The largest ``h`` such that every step in ``[0, h]`` is stable for all the eigenvalues ``lam``.
+
+    Along the ray of an eigenvalue ``lam``, ``|R(r lam)|^2 - 1`` is a real polynomial in
+    ``r`` (``R(z) = sum_k c_k z^k``, ``coefficients`` lowest first); at most its first
+    positive root the step is stable, whatever the shape of the method's region
+    further out. ``inf`` where no ray leaves the region (``lam = 0``, or none given).
+    Exact up to the roots' rounding; a step above it is not necessarily unstable
+    (:func:`step_is_stable` decides those).
+    """
+    c = np.asarray(coefficients, dtype=float)
+    out = np.inf
+    for l in np.atleast_1d(np.asarray(lam, dtype=complex)):
+        if l == 0:
+            continue
+        a = c * l ** np.arange(c.size)              # R(r l) = sum_k a_k r^k
+        f = np.convolve(a, np.conj(a)).real          # |R(r l)|^2
+        f[0] -= 1.0
+        hi_first = f[::-1]
+        r = np.roots(hi_first)
+        pos = r.real[(np.abs(r.imag) <= 1e-9 * np.abs(r)) & (r.real > 0)]
+        if pos.size:
+            x = float(pos.min())
+            d = np.polyder(hi_first)
+            for _ in range(3):   # Newton polishes the root (np.roots leaves ~1e-6 on RK8's degree 24)
+                slope = np.polyval(d, x)
+                if slope != 0.0:
+                    x -= np.polyval(hi_first, x) / slope
+            out = min(out, x)
+    return out
+
+
+def step_is_stable(h: float, lam: np.ndarray, amplification=rk4_amplification) -> bool:
+    """Whether ``|R(h lam)| <= 1`` for the eigenvalues ``lam`` (:func:`mode_eigenvalues`): one evaluation, no limit sought."""
+    return bool(np.all(np.abs(amplification(h * np.asarray(lam))) <= 1.0 + 1e-12))
 
 
 def check_step(period: float, steps_per_period: int, h_max: float, mode_name: str, method: str = "rk4") -> None:
