@@ -1,8 +1,14 @@
 """Sensitivities of the hybrid flow: the tangent replay against differences, exact identities and the orbit tools."""
 
+from dataclasses import dataclass, field
+
 import numpy as np
 import pytest
 
+from blademodel.components import Contact, HarmonicForce, Mass, Spring
+from blademodel.components.friction import Candidate, ContactContext, FrictionLaw
+from blademodel.components.parameter import Number, as_param
+from blademodel.model import Model
 from blademodel.zheng2022 import BladePair
 from blademodel.numeric.contract import C_LOGGED, N_COUNTERS
 from blademodel.numeric.kernels import make_integrator
@@ -198,3 +204,85 @@ def test_a_start_past_a_guard_is_settled_and_differentiated_through_its_reset():
     D = P.differences(y_closed, 0, sc, 1e-5)
     assert np.max(np.abs(s.monodromy - D)) < 1e-6 * np.max(np.abs(s.monodromy))
     assert np.all(s.monodromy[:, ig.meta["state"].index("z")] == 0.0)
+
+
+def test_whole_steps_of_affine_modes_read_from_the_record_give_the_same_tangent():
+    """The replay takes a run of whole steps in a mode whose flow is affine in the state as one matrix power and
+    reads their states from the kernel's record (``PeriodMap`` passes it); stepping every one of them, as
+    ``flow_sensitivity`` does on its own, gives the same monodromy and end state, through impacts and stick-slip."""
+    from blademodel.numeric.tangent import sensitivity_module
+    for law in ("coulomb", "bilinear"):
+        _, ig, y, mode = _settled(law)
+        assert sensitivity_module(ig).FLOW_AFFINE.all()   # every built-in law's flow is affine in each mode
+        P = PeriodMap(ig, 2)
+        r = P.run(y, mode)
+        assert r.n_log >= 20
+        n = ig.n_physical
+        fast = flow_sensitivity(ig, r.start[:n], r.mode, 2, run=(r.end, r.mode_end, r.log, r.n_log), record=r.states)
+        each = flow_sensitivity(ig, y, mode, 2)
+        assert np.array_equal(fast.state, each.state)
+        assert np.max(np.abs(fast.monodromy - each.monodromy)) <= 1e-12 * np.max(np.abs(each.monodromy))
+
+
+def test_the_period_map_differentiates_the_run_it_made():
+    """A derivative at the point the map was just evaluated at replays that run (no new integration) and equals a
+    fresh map's; a start the map has not seen runs the kernel again."""
+    _, ig, y, mode = _settled("bilinear")
+    P = PeriodMap(ig, 1)
+    Py, _ = P(y, mode)
+    runs = P.evaluations
+    s = P.derivatives(y, mode)
+    assert P.evaluations == runs
+    fresh = PeriodMap(ig, 1).derivatives(y, mode)
+    assert np.array_equal(s.state, Py) and np.array_equal(s.monodromy, fresh.monodromy)
+    P.derivatives(y * (1 + 1e-9), mode)
+    assert P.evaluations == runs + 1
+
+
+@dataclass(frozen=True)
+class CubicDrag(FrictionLaw):
+    """``f = c3 v^3`` while closed: a law whose flow is not affine in the state (one mode, no guard)."""
+
+    c3: Number = 1.0
+    _p: dict = field(init=False, repr=False, compare=False)
+
+    modes = ("drag",)
+
+    def __post_init__(self):
+        object.__setattr__(self, "_p", {"c3": as_param(self.c3, "c3", field="friction: c3", minimum=0.0)})
+
+    def parameters(self):
+        return dict(self._p)
+
+    def force(self, mode, ctx: ContactContext):
+        return ctx.params["c3"] * ctx.v ** 3
+
+    def guards(self, mode, ctx: ContactContext):
+        return []
+
+    def entry(self, ctx: ContactContext):
+        return [Candidate("drag")]
+
+
+def test_a_flow_not_affine_in_the_state_is_differentiated_step_by_step():
+    """A mass on a spring against a cubic drag (``m x'' + k x + c3 x'^3 = F sin wt``): its mode is not affine, so
+    the replay differentiates every step with the Jacobian at the stages; monodromy and a parameter derivative
+    equal central differences of the map."""
+    from blademodel.numeric.tangent import sensitivity_module
+    mass = Mass("1", 1.0, dofs=("x",))
+    model = Model((mass,), (Spring("x1", 1e4),), (), (HarmonicForce(mass, 50.0, 80.0),),
+                  (Contact(mass, None, alpha=0.0, normal_load=1.0, friction=CubicDrag(2.0)),))
+    ig = make_integrator(model, steps_per_period=2000, event_tol=1e-13)
+    y = ig.initial_state()
+    mode = ig.mode_of(y)
+    assert sensitivity_module(ig).FLOW_AFFINE[mode] == 0   # the drag mode, which the load never lets open
+    assert ig.advance(y, mode, 0, 30)[0] == 0
+    y = y[:ig.n_physical].copy()
+    names = ig.meta["params"]
+    dp = np.zeros(len(names))
+    dp[names.index("c3")] = 1.0
+    s = PeriodMap(ig, 1).derivatives(y, mode, dp)
+    assert np.max(np.abs(s.monodromy - _differences(ig, y, mode, 1))) < 1e-7 * np.max(np.abs(s.monodromy))
+    d = 1e-6 * ig.p_raw[names.index("c3")]
+    fd = (_map(ig, y, mode, 1, p_raw=ig.p_raw + d * dp) - _map(ig, y, mode, 1, p_raw=ig.p_raw - d * dp)) / (2 * d)
+    assert np.max(np.abs(s.parameter - fd)) < 1e-6 * np.max(np.abs(s.parameter))

@@ -3,7 +3,10 @@
 For every mode of a :class:`~blademodel.symbolic.system.HybridSystem` SymPy
 differentiates, once per model structure:
 
-* the flow ``f(t, y, p)``: ``df/dy`` and ``df/dp`` (``flow_jacobian``);
+* the flow ``f(t, y, p)``: ``df/dy`` and ``df/dp`` (``flow_jacobian``), and whether
+  ``df/dy`` is constant in the mode (``FLOW_AFFINE``: the flow is affine in the state,
+  as every built-in law's is), with ``df/dp`` along a direction and ``df/dt``
+  (``flow_partials``) for such modes;
 * every guard ``g(t, y, p)``: ``dg/dy``, ``dg/dp`` and ``dg/dt`` (``guard_gradient``);
 * every transition's reset ``y+ = R(t, y-, p)``: ``dR/dy`` and ``dR/dp``
   (``reset_jacobian``), chosen by the mode the transition went to.
@@ -46,6 +49,9 @@ def sensitivity_source(system: HybridSystem) -> str:
 
     * ``flow_jacobian(mode, t, y, p, Jy, Jp, Jt)``: ``Jy`` is ``n`` by ``n``, ``Jp``
       ``n`` by the number of raw parameters, ``Jt`` the explicit time derivative;
+    * ``flow_partials(mode, t, y, p, dp, fp, ft)``: ``fp = (df/dp) dp`` and ``ft = df/dt``
+      (every entry written);
+    * ``FLOW_AFFINE[mode]``: 1 if ``df/dy`` depends on neither the state nor the time;
     * ``guard_gradient(mode, gi, t, y, p, gy, gp) -> dg/dt``;
     * ``reset_jacobian(mode, gi, target, t, y, p, Ry, Rp, Rt) -> bool``: whether
       guard ``gi`` of ``mode`` has a transition to ``target``.
@@ -74,6 +80,23 @@ def sensitivity_source(system: HybridSystem) -> str:
         entries += [(f"Jp[{i}, {j}]", sp.diff(f, q)) for i, f in enumerate(flow) for j, q in enumerate(params)]
         entries += [(f"Jt[{i}]", sp.diff(f, t)) for i, f in enumerate(flow)]
         L += _fill(entries, pr, 8, "x")
+    L.append("")
+
+    dps = sp.symbols(f"_dp0:{len(params)}")
+    pr_d = _Printer({**names, **{d: f"dp[{j}]" for j, d in enumerate(dps)}})
+    L.append("def flow_partials(mode, t, y, p, dp, fp, ft):")
+    L.append('    """``fp = (df/dp) dp`` (``dp`` a direction in the raw parameters) and ``ft = df/dt`` of ``mode`` (generated)."""')
+    affine = []
+    for m, mode in enumerate(system.modes):
+        flow = [*system.u, *mode.accelerations, *mode.state_rates]
+        L.append(f"    {'if' if m == 0 else 'elif'} mode == {m}:")
+        exprs = [sum((sp.diff(f, q) * d for q, d in zip(params, dps)), sp.Integer(0)) for f in flow]
+        exprs += [sp.diff(f, t) for f in flow]
+        L += _block(exprs, [f"fp[{i}]" for i in range(n)] + [f"ft[{i}]" for i in range(n)], pr_d, 8, "x")
+        varying = set(state) | {t}
+        affine.append(int(all(not (sp.diff(f, s_).free_symbols & varying) for f in flow for s_ in state)))
+    L.append("")
+    L.append(f"FLOW_AFFINE = np.array({affine!r}, dtype=np.int64)")
     L.append("")
 
     L.append("def guard_gradient(mode, gi, t, y, p, gy, gp):")

@@ -24,8 +24,9 @@ from .compiled import _load, cache_dir, derive_cached, hash_sources, PACKAGE
 from .contract import C_LOGGED, N_COUNTERS, STATUS_NAMES
 from .methods import get_method
 
-_TEMPLATE_FUNCTIONS = ("flow_jacobian", "guard_gradient", "reset_jacobian", "tangent_step", "tangent_sum",
-                       "step_tangent", "event_time_tangent", "reset_tangent", "replay_tangent")
+_TEMPLATE_FUNCTIONS = ("flow_jacobian", "flow_partials", "guard_gradient", "reset_jacobian", "tangent_step",
+                       "tangent_sum", "power_apply", "step_tangent", "event_time_tangent", "reset_tangent",
+                       "skip_to", "same_state", "affine_jacobian", "replay_tangent")
 
 
 class SensitivityError(RuntimeError):
@@ -87,6 +88,7 @@ def sensitivity_module(integrator) -> ModuleType:
 
 
 _RK4_TABLEAU = get_method("rk4").tableau()
+_NO_RECORD = np.zeros((0, 1))
 
 
 def _tableau(integrator) -> np.ndarray:
@@ -94,8 +96,36 @@ def _tableau(integrator) -> np.ndarray:
     return integrator._tableau if integrator._tableau.size else _RK4_TABLEAU
 
 
+def logged_run(integrator, y, mode, periods: int = 1, log_size: int = 256):
+    """Integrate ``periods`` periods from ``(y, mode)`` at ``t = 0`` with the kernel, logging every event.
+
+    Returns ``(end, mode_end, log, n_log)``: the full end state, the end mode, the
+    event log (``integrator.log_buffer``, grown until the run fits) and its length: what
+    :func:`flow_sensitivity` replays.
+
+    Raises
+    ------
+    SensitivityError
+        If the kernel stopped early.
+    """
+    n = integrator.n_physical
+    start = np.zeros(integrator.n_state)
+    start[:n] = np.asarray(y, dtype=float)[:n]
+    size = max(int(log_size), 16)
+    while True:
+        counters = np.zeros(N_COUNTERS, dtype=np.int64)
+        log = integrator.log_buffer(size)
+        end = start.copy()
+        status, mode_end, t = integrator.advance(end, int(mode), 0, int(periods), log=log, counters=counters)
+        if status != 0:
+            raise SensitivityError(f"the integration stopped at t = {t:.6g} s: {STATUS_NAMES.get(status, status)}")
+        if counters[C_LOGGED] <= size:
+            return end, int(mode_end), log, int(counters[C_LOGGED])
+        size = int(counters[C_LOGGED]) + 16
+
+
 def flow_sensitivity(integrator, y, mode: int, periods: int = 1, *, dp=None, dperiod: float = 0.0,
-                     log_size: int = 256) -> FlowSensitivity:
+                     log_size: int = 256, run: tuple | None = None, record=None) -> FlowSensitivity:
     """Integrate ``periods`` excitation periods from ``(y, mode)`` at ``t = 0`` with the state's derivatives.
 
     Parameters
@@ -116,6 +146,13 @@ def flow_sensitivity(integrator, y, mode: int, periods: int = 1, *, dp=None, dpe
         time moves, and the state with it at its rate ``f``).
     log_size : int
         First size of the event log (doubled until the run fits).
+    run : tuple, optional
+        The kernel's run from ``(y, mode)`` already made, as :func:`logged_run` returns
+        it: only the replay is done.
+    record : ndarray, optional
+        That run's full states at every step (``record_buffer``'s ``y``, the start in
+        row 0): the replay reads the state of whole steps from it instead of stepping
+        it again.
 
     Returns
     -------
@@ -132,33 +169,22 @@ def flow_sensitivity(integrator, y, mode: int, periods: int = 1, *, dp=None, dpe
                                "(models with at most one contact)")
     mod = sensitivity_module(integrator)
     n = integrator.n_physical
-    full = np.zeros(integrator.n_state)
-    full[:n] = np.asarray(y, dtype=float)[:n]
-    start = full.copy()
-    size = max(int(log_size), 16)
-    while True:
-        counters = np.zeros(N_COUNTERS, dtype=np.int64)
-        log = integrator.log_buffer(size)
-        end = start.copy()
-        status, mode_end, t = integrator.advance(end, int(mode), 0, int(periods), log=log, counters=counters)
-        if status != 0:
-            raise SensitivityError(f"the integration stopped at t = {t:.6g} s: {STATUS_NAMES.get(status, status)}")
-        if counters[C_LOGGED] <= size:
-            break
-        size = int(counters[C_LOGGED]) + 16
-    n_log = int(counters[C_LOGGED])
+    start = np.zeros(integrator.n_state)
+    start[:n] = np.asarray(y, dtype=float)[:n]
+    end, mode_end, log, n_log = logged_run(integrator, start, mode, periods, log_size) if run is None else run
     npar = int(mod.N_RAW_PARAMS)
     use_p = dp is not None
     dpv = np.zeros(npar) if dp is None else np.asarray(dp, dtype=float)
     if dpv.shape != (npar,):
         raise ValueError(f"dp must have one entry per raw parameter ({npar}: "
                          f"{', '.join(integrator.meta['params'])}), got shape {dpv.shape}")
-    V = np.zeros((n, n + 1))
+    V = np.zeros((n, n + 1 if use_p else n))
     V[:, :n] = np.eye(n)
     yr = start.copy()
     status, mode_r, t = mod.replay_tangent(yr, int(mode), integrator.p, integrator.period,
                                            integrator.steps_per_period, 0, int(periods), _tableau(integrator),
-                                           integrator._tableau, *log, n_log, V, use_p, dpv, float(dperiod))
+                                           integrator._tableau, *log, n_log, V, use_p, dpv, float(dperiod),
+                                           _NO_RECORD if record is None else record)
     if status != 0:
         raise SensitivityError(f"the tangent replay stopped at t = {t:.6g} s: {STATUS_NAMES.get(status, status)}")
     if mode_r != mode_end:

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
+
+from ..numeric.contract import C_EVENTS, C_LOGGED, N_COUNTERS
 
 #: How a :class:`PeriodMap` differentiates: ``"auto"`` (the tangent where the kernel has one, else
 #: differences), ``"tangent"`` (variational equations and saltation matrices, or an error) or
@@ -14,12 +18,55 @@ class FlowError(RuntimeError):
     """The integration behind the period map stopped early (status and message of the kernel)."""
 
 
+@dataclass
+class MapRun:
+    """One integration of the period map, kept so that what it computed is not computed again.
+
+    Attributes
+    ----------
+    start : ndarray
+        The full start state, settled (:func:`settle`).
+    mode : int or ndarray
+        The settled start mode.
+    fired : list
+        The transitions :func:`settle` fired at ``t = 0``.
+    end : ndarray
+        The full end state.
+    mode_end : int or ndarray
+    t, Y : ndarray
+        The orbit at every step (``Y``: physical states), ``t = 0`` included.
+    states : ndarray
+        The same, full states (``Y`` is a view of it).
+    log : tuple
+        The event log (``integrator.log_buffer``) and ``n_log`` its length.
+    n_log : int
+    events : int
+        Events crossed.
+    """
+
+    start: np.ndarray
+    mode: object
+    fired: list
+    end: np.ndarray
+    mode_end: object
+    t: np.ndarray
+    Y: np.ndarray
+    states: np.ndarray
+    log: tuple
+    n_log: int
+    events: int
+
+
 class PeriodMap:
     """``P(y) = `` the state ``periods`` excitation periods after ``(y, mode)`` at ``t = 0``.
 
     The forcing is ``T``-periodic, so the map is the same from any whole period;
     ``y`` holds the physical states only (coordinates, velocities, friction-law
     states; no energy accumulators).
+
+    Each evaluation records the orbit at every step and logs its events
+    (:meth:`run`), and the last one is kept: the tangent at the same point replays
+    that run instead of integrating again, and the orbit's samples are read from it.
 
     Parameters
     ----------
@@ -47,8 +94,50 @@ class PeriodMap:
         self.periods = int(periods)
         self.n = integrator.n_physical
         self.evaluations = 0
+        self.last_events = -1
         self.method = jacobian
         self.exact = jacobian != "differences" and product
+        self._last: tuple | None = None   # (key, MapRun) of the last run
+        self._log_size = 64
+
+    def run(self, y, mode) -> MapRun:
+        """Integrate the map from ``(y, mode)``, recording every step and logging every event.
+
+        The last run is kept and returned again for the same ``y`` and ``mode``.
+
+        Raises
+        ------
+        FlowError
+            If the integration stopped early.
+        """
+        ig = self.integrator
+        y = np.asarray(y, dtype=float)
+        key = (y[:self.n].tobytes(), _key(mode))
+        if self._last is not None and self._last[0] == key:
+            return self._last[1]
+        full = np.zeros(ig.n_state)
+        full[:self.n] = y[:self.n]
+        fired: list = []
+        m0 = settle(ig, full, _copy(mode), fired)
+        start = full.copy()
+        rec = ig.record_buffer(self.periods * ig.steps_per_period + 1)
+        while True:
+            counters = np.zeros(N_COUNTERS, dtype=np.int64)
+            log = ig.log_buffer(self._log_size)
+            full[:] = start
+            status, mode_end, t = ig.advance(full, _copy(m0), 0, self.periods, n_transient=0, record=rec, log=log,
+                                             counters=counters, check=False)
+            if status != 0:
+                raise FlowError(f"the integration stopped at t = {t:.6g} s with status {status}")
+            if counters[C_LOGGED] <= self._log_size:
+                break
+            self._log_size = int(counters[C_LOGGED]) + 16
+        self.evaluations += 1
+        r = MapRun(start=start, mode=m0, fired=fired, end=full, mode_end=mode_end, t=rec[0], Y=rec[1][:, :self.n],
+                   states=rec[1], log=log, n_log=int(counters[C_LOGGED]), events=int(counters[C_EVENTS]))
+        self.last_events = r.events
+        self._last = (key, r)
+        return r
 
     def derivatives(self, y, mode, dp=None, dperiod: float = 0.0):
         """``P(y)``, its mode, ``dP/dy`` and (with ``dp``) ``dP/dlambda`` by the tangent of the flow.
@@ -73,32 +162,25 @@ class PeriodMap:
         SensitivityError
             Where the tangent cannot follow the flow.
         """
-        from ..numeric.tangent import flow_sensitivity, settle_jacobian
+        from ..numeric.tangent import SensitivityError, flow_sensitivity, settle_jacobian
         ig = self.integrator
-        full = np.zeros(ig.n_state)
-        full[:self.n] = y
-        fired: list = []
-        mode = settle(ig, full, mode, fired)
-        s = flow_sensitivity(ig, full[:self.n], mode, self.periods, dp=dp, dperiod=dperiod)
-        self.evaluations += 1
-        if fired:
-            D, dl = settle_jacobian(ig, fired, dp)
+        try:
+            r = self.run(y, mode)
+        except FlowError as e:
+            raise SensitivityError(str(e)) from None
+        s = flow_sensitivity(ig, r.start[:self.n], r.mode, self.periods, dp=dp, dperiod=dperiod,
+                             run=(r.end, r.mode_end, r.log, r.n_log), record=r.states)
+        if r.fired:
+            D, dl = settle_jacobian(ig, r.fired, dp)
             if s.parameter is not None:
                 s.parameter = s.parameter + s.monodromy @ dl
             s.monodromy = s.monodromy @ D
         return s
 
     def __call__(self, y, mode):
-        """The state and mode ``n T`` after ``(y, mode)``."""
-        ig = self.integrator
-        full = np.zeros(ig.n_state)
-        full[:self.n] = y
-        mode = settle(ig, full, mode)
-        status, mode_end, t = ig.advance(full, mode, 0, self.periods)
-        self.evaluations += 1
-        if status != 0:
-            raise FlowError(f"the integration stopped at t = {t:.6g} s with status {status}")
-        return full[:self.n].copy(), mode_end
+        """The state and mode ``n T`` after ``(y, mode)``; ``last_events`` holds the events the run crossed."""
+        r = self.run(y, mode)
+        return r.end[:self.n].copy(), _copy(r.mode_end)
 
     def linearize(self, y, mode, scale, rel_step: float = 1e-6):
         """``P(y)``, the mode it ends in and ``dP/dy``: one tangent run, or the map and its differences."""
@@ -138,6 +220,18 @@ class PeriodMap:
                 return s.monodromy
         return self.differences(y, mode, scale, rel_step)
 
+    def plain(self, y, mode):
+        """``P(y)`` alone: no record, no log, nothing kept (the runs of difference quotients)."""
+        ig = self.integrator
+        full = np.zeros(ig.n_state)
+        full[:self.n] = y
+        mode = settle(ig, full, _copy(mode))
+        status, _, t = ig.advance(full, mode, 0, self.periods, check=False)
+        self.evaluations += 1
+        if status != 0:
+            raise FlowError(f"the integration stopped at t = {t:.6g} s with status {status}")
+        return full[:self.n].copy()
+
     def differences(self, y, mode, scale, rel_step: float = 1e-6) -> np.ndarray:
         """``dP/dy`` by central differences, column ``i`` with step ``rel_step * scale[i]`` (see :meth:`jacobian`)."""
         y = np.asarray(y, dtype=float)
@@ -147,7 +241,7 @@ class PeriodMap:
             yp, ym = y.copy(), y.copy()
             yp[i] += d
             ym[i] -= d
-            J[:, i] = (self(yp, _copy(mode))[0] - self(ym, _copy(mode))[0]) / (2.0 * d)
+            J[:, i] = (self.plain(yp, mode) - self.plain(ym, mode)) / (2.0 * d)
         return J
 
 
@@ -180,6 +274,13 @@ def settle(integrator, y, mode, fired: list | None = None):
             fired.append((mode, past[0], target, before))
         mode = target
     return mode
+
+
+def _key(mode):
+    """A hashable form of a mode (an int, or the per-contact kernel's array)."""
+    if isinstance(mode, (int, np.integer)):
+        return (int(mode),)
+    return tuple(np.atleast_1d(mode).tolist())
 
 
 def _copy(mode):
