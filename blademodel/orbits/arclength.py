@@ -3,21 +3,32 @@
 A branch of period-``n`` orbits is the curve ``P(y; lambda) = y`` in the space of the
 section state ``y`` and one config field ``lambda`` (the excitation frequency for a
 forced-response curve, ``gamma``, ``F0``, the gap ...). It is followed by
-pseudo-arclength continuation: a step ``ds`` along the tangent, then Newton's method on
-the orbit condition plus the arclength condition, so the branch is followed around
-folds. Both the state and the field are scaled (each state by its excursion on the
-first orbit, the field by the continuation range), the Jacobians are central
-the tangent of the period map (:class:`~blademodel.orbits.period_map.PeriodMap`:
-variational equations with saltation matrices, the field's column along the raw
-parameters' direction ``d p / d lambda``) where the kernel has one, else its central
-differences (the field's column from maps built at ``lambda +- delta``), and the step
-grows after easy corrections and is halved after hard or failed ones.
+pseudo-arclength continuation: a step ``ds`` along the branch, then corrections of the
+orbit condition plus the arclength condition, so the branch is followed around folds.
+Both the state and the field are scaled (each state by its excursion on the newest
+orbit, the field by the continuation range).
 
-Each point carries its Floquet multipliers. A change in the number of multipliers
-outside the unit circle between two points is a bifurcation, located by bisection on
-the arclength and classified by the multiplier that crossed: through ``+1`` a fold
-(the field's tangent component changes sign there too), through ``-1`` a period
-doubling, a complex pair a Neimark-Sacker bifurcation.
+* **Jacobian**: the monodromy matrix from the tangent of the period map
+  (:class:`~blademodel.orbits.period_map.PeriodMap`: variational equations with
+  saltation matrices, replaying the run the last residual made) where the kernel has
+  one, else central differences; the field's column is a forward difference of the map.
+* **Prediction**: on a smooth stretch, the quadratic through the last three points and
+  the Jacobian extrapolated from the last two; else the tangent step and the last
+  Jacobian.
+* **Correction**: Broyden's method from that matrix (residuals only), steps halved where
+  the residual does not fall (a kink of the map, where an event appears), then Newton
+  with fresh Jacobians, then shooting at the predicted value of the field.
+* **Parameters**: each value of the field gets the first integrator with its parameters
+  changed, interpolated along the field's path where it moves them affinely
+  (:mod:`.field_path`).
+* The step grows after easy corrections and is halved after hard or failed ones.
+
+Each point carries its Floquet multipliers and its orbit's number of events. A change in
+the number of multipliers outside the unit circle between two points is a bifurcation,
+located by regula falsi on the multiplier nearest the unit circle and classified by the
+multiplier that crossed: through ``+1`` a fold (the field's tangent component changes
+sign there too), through ``-1`` a period doubling, a complex pair a Neimark-Sacker
+bifurcation. A change in the number of events is a grazing, located by bisection.
 """
 
 from __future__ import annotations
@@ -27,8 +38,8 @@ from typing import Callable
 
 import numpy as np
 
-from ..numeric.contract import C_EVENTS, N_COUNTERS
-from .period_map import FlowError, PeriodMap, _copy
+from .field_path import AffineFieldPath
+from .period_map import FlowError, PeriodMap, _copy, _key
 from .shooting import _n_coordinates, _orbit_samples, _same, _state_scale, find_periodic_orbit
 
 
@@ -119,7 +130,8 @@ class _Family:
     a declared parameter by its bare name (``omega``).
     """
 
-    def __init__(self, config, name: str, periods: int, settings: dict, start: float, jacobian: str = "auto"):
+    def __init__(self, config, name: str, periods: int, settings: dict, start: float, jacobian: str = "auto",
+                 bounds: tuple | None = None):
         self.config, self.name, self.periods, self.settings = config, name, periods, settings
         self.jacobian = jacobian
         try:
@@ -129,18 +141,53 @@ class _Family:
                              f"a value it takes: {e}") from None
         self._cache: dict = {}
         self._first = None
+        self._bounds = (min(bounds), max(bounds)) if bounds is not None else None
+        self._path: AffineFieldPath | None = None
+        self._probed = False
 
     def config_at(self, value: float):
         from ..config import apply_overrides
         return apply_overrides(self.config, {self.name: float(value)}, source="continuation")
 
+    def _values_at(self, value: float) -> tuple[np.ndarray, float | None]:
+        """The raw parameters and excitation period of the model built at ``value`` (same structure as the first)."""
+        from ..numeric.integrator import excitation_period
+        model = self.config_at(value).build()
+        if model.structure_key() != self._first.model.structure_key():
+            raise ValueError(f"{self.name} = {value:g} changes the model's structure")
+        try:
+            period = excitation_period(model)
+        except ValueError:
+            period = None
+        return np.array([model.parameters[k] for k in self._first.meta["params"]], dtype=float), period
+
+    def path(self) -> AffineFieldPath | None:
+        """The field's affine path over the range widened by a quarter each side (or the range itself), if any.
+
+        Only for integrators that take parameter values directly
+        (``with_parameter_values``), once the first one exists.
+        """
+        if not self._probed and self._first is not None and self._bounds is not None \
+                and hasattr(self._first, "with_parameter_values"):
+            self._probed = True
+            lo, hi = self._bounds
+            if hi > lo:
+                wide = 0.25 * (hi - lo)
+                self._path = (AffineFieldPath.probe(self._values_at, lo - wide, hi + wide)
+                              or AffineFieldPath.probe(self._values_at, lo, hi))
+        return self._path
+
     def parameter_direction(self, value: float, delta: float, names: list) -> tuple[np.ndarray, float]:
         """``d p / d lambda`` over the raw parameters ``names`` and ``d T / d lambda`` at ``value``.
 
-        Central differences of the built models' parameter values and excitation
+        From the field's affine path where it has one (:mod:`.field_path`), else
+        central differences of the built models' parameter values and excitation
         periods (no integration): a field enters the parameters through the config's
         own formulas, which are smooth (most are linear).
         """
+        path = self.path()
+        if path is not None and path.covers(value) and list(names) == list(self._first.meta["params"]):
+            return path.derivative(value)
         from ..numeric.integrator import excitation_period
         out = []
         for v in (value + delta, value - delta):
@@ -152,22 +199,28 @@ class _Family:
         """The period map at ``value`` (the first integrator's parameters changed, where the kernel allows)."""
         key = float(value)
         if key not in self._cache:
-            from ..numeric.kernels import make_integrator
             if len(self._cache) > 8:
                 self._cache.pop(next(iter(self._cache)))
-            from ..numeric.integrator import StructureMismatch
-            model = self.config_at(key).build()
-            ig = None
-            if self._first is not None and hasattr(self._first, "with_parameters"):
-                try:
-                    ig = self._first.with_parameters(model)
-                except StructureMismatch:
-                    pass
-            if ig is None:
-                ig = make_integrator(model, **self.settings)
-                self._first = ig
-            self._cache[key] = PeriodMap(ig, self.periods, self.jacobian)
+            self._cache[key] = PeriodMap(self._integrator_at(key), self.periods, self.jacobian)
         return self._cache[key]
+
+    def _integrator_at(self, value: float):
+        """An integrator at ``value``: the first one with the path's parameter values, its parameters taken from
+        the model built at ``value``, or (another structure, or a kernel that takes no new parameters) a new one."""
+        from ..numeric.integrator import StructureMismatch
+        from ..numeric.kernels import make_integrator
+        path = self.path()
+        if path is not None and path.covers(value):
+            return self._first.with_parameter_values(*path.at(value))
+        model = self.config_at(value).build()
+        if self._first is not None and hasattr(self._first, "with_parameters"):
+            try:
+                return self._first.with_parameters(model)
+            except StructureMismatch:
+                pass
+        self._first = make_integrator(model, **self.settings)
+        self._probed = False
+        return self._first
 
 
 def continuation(config, name: str, start: float, stop: float, *, periods: int = 1, guess=None, mode=None,
@@ -215,7 +268,7 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
     Branch
     """
     settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
-    fam = _Family(config, name, periods, settings, start, jacobian)
+    fam = _Family(config, name, periods, settings, start, jacobian, bounds=(start, stop))
     span = abs(stop - start)
     if not span > 0:
         raise ValueError(f"start and stop must differ, got {start!r} and {stop!r}")
@@ -288,7 +341,7 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
     if not lo <= point.param <= hi:
         raise ValueError(f"the period doubling at {name} = {point.param:g} lies outside [{lo:g}, {hi:g}]")
     settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
-    fam = _Family(config, name, 2 * periods, settings, point.param, jacobian)
+    fam = _Family(config, name, 2 * periods, settings, point.param, jacobian, bounds=(start, stop))
     span = hi - lo
     P2 = fam.map_at(point.param)
     ig = P2.integrator
@@ -341,7 +394,8 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
     message = f"left [{lo:g}, {hi:g}] in {name}"
     jumped = False
     while len(pts) < max_points:
-        X_new, m_new, A_new = ctx.correct(X + h * T, T, m, A)
+        X_pred, A_pred = ctx.predict(pts, X, T, A, h)
+        X_new, m_new, A_new = ctx.correct(X_pred, T, m, A_pred)
         secant = False
         if X_new is None and abs(T[-1]) > 0.1:
             # Newton on the arclength system can cycle across a kink of the map (a switching
@@ -370,6 +424,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
         else:
             T_new = _tangent(A_new, T)
         new = ctx.point(X_new, m_new, A_new)
+        new["regular"] = not secant
         special += ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
         pts.append(new)
         # each state scaled by its excursion on the newest orbit: amplitudes that grow a
@@ -406,6 +461,14 @@ def _tangent(A, previous):
     return t if np.dot(t, previous) >= 0 else -t
 
 
+#: Halvings of a correction step whose residual did not fall, before the step is taken as it is.
+MAX_HALVINGS = 4
+#: Corrections in a row that do not halve the best residual, after which a correction gives up.
+STALL = 5
+#: A trial of the grazing bisection is solved to this fraction of the bracket's width (scaled residual).
+TRIAL_ACCURACY = 1e-4
+
+
 class _Context:
     """Residuals, Jacobians, corrections and bifurcation tests in the scaled unknowns."""
 
@@ -414,10 +477,15 @@ class _Context:
         self.tol, self.rel_step, self.max_corrections = tol, rel_step, max_corrections
         self.n = scale.size
         self.iterations = 0
+        self.events = -1   # events of the orbit of the last residual's run
         self.why = ""
 
-    def correct_at_value(self, X, mode):
-        """Shooting at the field's value of the prediction ``X`` (no arclength condition); ``(None, ..)`` on failure."""
+    def correct_at_value(self, X, mode, jacobian=True):
+        """Shooting at the field's value of the prediction ``X`` (no arclength condition); ``(None, ..)`` on failure.
+
+        Without ``jacobian`` the point's Jacobian is not taken (None), and ``self.events``
+        holds its orbit's events.
+        """
         from .shooting import ShootingError, _newton
         lam = X[-1] * self.span
         try:
@@ -431,6 +499,9 @@ class _Context:
             mode = _copy(mode_end)
         Xc = np.append(y / self.scale, X[-1])
         self.iterations = self.max_corrections // 2
+        if not jacobian:
+            self.residual(Xc, mode)   # the orbit's events
+            return Xc, mode, None
         A = self._jacobian_at(Xc, mode)
         return (Xc, mode, A) if A is not None else (None, mode, None)
 
@@ -459,40 +530,52 @@ class _Context:
         P = self.fam.map_at(X[-1] * self.span)
         y = X[:-1] * self.scale
         Py, mode_end = P(y, _copy(mode))
+        self.events = P.last_events
         return (Py - y) / self.scale, mode_end
 
     def jacobian(self, X, mode):
-        """``d residual / dX`` (``n x (n + 1)``): the tangent of the flow where it exists, else central differences."""
+        """``d residual / dX`` (``n x (n + 1)``): the tangent of the flow where it exists, else central differences.
+
+        The state columns are the monodromy matrix (the tangent replays the run the
+        residual at ``X`` already made); the field's column is a forward difference of
+        the map, ``(P(y; lambda + delta) - P(y; lambda)) / delta`` with ``P(y; lambda)``
+        from that same run: one integration, where the tangent's own parameter column,
+        which follows the parameters and the moving period step by step, costs about
+        seven. Its error, about ``delta`` relative, only slows the corrections by as
+        much; the orbits are solved to ``tol`` whatever the column, and the multipliers
+        come from the exact monodromy.
+        """
         n, d = self.n, self.rel_step
         lam = X[-1] * self.span
         P = self.fam.map_at(lam)
         y = X[:-1] * self.scale
         A = np.empty((n, n + 1))
+        J = None
         if P.exact:
-            ig = P.integrator
-            dp, dT = self.fam.parameter_direction(lam, d * self.span, ig.meta["params"])
-            s = P.try_derivatives(y, mode, dp, dT)
+            s = P.try_derivatives(y, mode)
             if s is not None:
-                A[:, :n] = (s.monodromy - np.eye(n)) * self.scale[None, :] / self.scale[:, None]
-                A[:, n] = s.parameter * self.span / self.scale
-                return A
-        J = P.differences(y, mode, self.scale, d)
+                J = s.monodromy
+        if J is None:
+            J = P.differences(y, mode, self.scale, d)
         A[:, :n] = (J - np.eye(n)) * self.scale[None, :] / self.scale[:, None]
-        Pp, Pm = self.fam.map_at(lam + d * self.span), self.fam.map_at(lam - d * self.span)
-        A[:, n] = (Pp(y, _copy(mode))[0] - Pm(y, _copy(mode))[0]) / self.scale / (2 * d)
+        A[:, n] = (self.fam.map_at(lam + d * self.span).plain(y, mode) - P(y, mode)[0]) / self.scale / d
         return A
 
-    def correct(self, X, T, mode, A=None):
+    def correct(self, X, T, mode, A=None, jacobian=True, tol=None):
         """Newton on the orbit and arclength conditions from the prediction ``X``; ``(None, ..)`` on failure.
 
-        With ``A`` (the Jacobian at the last point) the first attempt is a chord method:
-        the same matrix every step, only residuals evaluated; then Newton with the
-        Jacobian taken afresh. The orbit must come back to the mode it starts in at the
+        With ``A`` (the Jacobian at the last point) the first attempt is Broyden's
+        method: that matrix, corrected by a rank-one update after every step, only
+        residuals evaluated (the arclength row is exact and stays so); then Newton with
+        the Jacobian taken afresh. The orbit must come back to the mode it starts in at the
         section: converged in another one, or failing where the flow from the
         prediction ends in another one (the section state crossed a switching boundary
         between the points), the correction is done again from that mode. Returns the
-        point, its mode and its Jacobian.
+        point, its mode and its Jacobian (None without ``jacobian``: for a test that needs
+        only the orbit's events, ``self.events``, which the last residual's run counted).
+        ``tol`` replaces ``self.tol`` for this correction.
         """
+        tol = self.tol if tol is None else tol
         Xp = X.copy()
         self.why = ""
         tries = ([(mode, True)] if A is not None else []) + [(mode, False)]
@@ -504,15 +587,36 @@ class _Context:
             first_end = None
             try:
                 G = np.vstack([A, T]) if chord else None
+                X_old = F_old = None
+                res_old = best = np.inf
+                halvings = since_best = 0
                 for it in range(2 * self.max_corrections if chord else self.max_corrections):
                     r, mode_end = self.residual(Xc, mode)
                     first_end = mode_end if first_end is None else first_end
                     res = float(np.max(np.abs(r)))
-                    if res <= self.tol:
+                    if res <= tol:
                         break
+                    if res < 0.5 * best:
+                        best, since_best = res, 0
+                    else:
+                        since_best += 1
+                        if since_best > STALL:
+                            raise FlowError(f"the corrections stalled at a residual of {best:.2g}")
+                    F = np.append(r, np.dot(T, Xc - Xp))
+                    if chord and X_old is not None:   # Broyden: the secant condition along the step taken
+                        step = Xc - X_old
+                        G = G + np.outer(F - F_old - G @ step, step) / np.dot(step, step)
+                    if res >= res_old and halvings < MAX_HALVINGS:
+                        # no decrease (the step crossed a kink of the map, where an event appears or
+                        # leaves, and undamped corrections cycle between its sides): back halfway
+                        halvings += 1
+                        Xc = X_old + 0.5 * (Xc - X_old)
+                        continue
+                    halvings = 0
                     if not chord:
                         G = np.vstack([self.jacobian(Xc, mode), T])
-                    Xc = Xc + np.linalg.solve(G, -np.append(r, np.dot(T, Xc - Xp)))
+                    X_old, F_old, res_old = Xc, F, res
+                    Xc = Xc + np.linalg.solve(G, -F)
                     if not (np.all(np.isfinite(Xc)) and np.linalg.norm(Xc - Xp) < 1.0):
                         raise FlowError("the correction diverged (moved by more than the orbit's excursion)")
                 else:
@@ -525,50 +629,88 @@ class _Context:
                 continue
             self.iterations = it
             if _same(mode_end, mode):
+                if not jacobian:
+                    return Xc, mode, None
                 A = self._jacobian_at(Xc, mode)
                 if A is None:
                     continue
                 return Xc, mode, A
+            # converged, but to an orbit that comes back in another mode: solving again from the
+            # same mode (Newton after Broyden) lands there too; that mode is the one to try
+            tries = [(m, c) for m, c in tries if _key(m) != _key(mode)]
             if (_key(mode_end), False) not in tried:
                 tries.append((_copy(mode_end), False))
             self.why = "the orbit's mode at the section keeps changing (it switches exactly there)"
         return None, mode, None
 
-    def point(self, X, mode, A):
-        """The branch point's record from its scaled unknowns and Jacobian."""
+    def predict(self, pts, X, T, A, h):
+        """The prediction a step ``h`` along the branch from ``X`` and the matrix Broyden's method starts from.
+
+        On a smooth stretch (the last three points in one mode with the same number of
+        events, the last two reached by regular steps), the quadratic through the three
+        points in their arclength, and the Jacobian extrapolated linearly from the last
+        two: the corrections start about a hundred times closer and contract about
+        a hundred times faster than from the tangent step and the last Jacobian, which
+        are taken elsewhere.
+        """
+        if A is None or len(pts) < 3:
+            return X + h * T, A
+        a, b, c = pts[-3], pts[-2], pts[-1]
+        if not (b.get("regular") and c.get("regular") and a["events"] == b["events"] == c["events"]
+                and _key(a["mode"]) == _key(b["mode"]) == _key(c["mode"])):
+            return X + h * T, A
+        Xa, Xb = (np.append(q["state"] / self.scale, q["param"] / self.span) for q in (a, b))
+        d0, d1 = float(np.linalg.norm(Xb - Xa)), float(np.linalg.norm(X - Xb))
+        if not (d0 > 0 and d1 > 0):
+            return X + h * T, A
+        s0, s1 = -(d0 + d1), -d1       # arclength of a and b; X is at 0, the prediction at h
+        La = (h - s1) * h / ((s0 - s1) * s0)
+        Lb = (h - s0) * h / ((s1 - s0) * s1)
+        Lc = (h - s0) * (h - s1) / (s0 * s1)
+        n = self.n
+        Ab = np.empty_like(A)
+        Ab[:, :n] = (b["J"] - np.eye(n)) * self.scale[None, :] / self.scale[:, None]
+        Ab[:, n] = b["dl"] * self.span / self.scale
+        return La * Xa + Lb * Xb + Lc * X, A + (A - Ab) * (h / d1)
+
+    def multipliers(self, A):
+        """Floquet multipliers from the scaled Jacobian ``A``, largest modulus first."""
         n = self.n
         J = A[:, :n] * self.scale[:, None] / self.scale[None, :] + np.eye(n)
         mu = np.linalg.eigvals(J)
-        mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+        return mu[np.argsort(-np.abs(mu), kind="stable")]
+
+    def point(self, X, mode, A):
+        """The branch point's record from its scaled unknowns and Jacobian."""
+        mu = self.multipliers(A)
         lam = X[-1] * self.span
         P = self.fam.map_at(lam)
         y = X[:-1] * self.scale
-        counters = np.zeros(N_COUNTERS, dtype=np.int64)
-        t, Y = _orbit_samples(P.integrator, y, mode, self.fam.periods, counters)
+        r = P.run(y, mode)
+        Y = r.Y
         amp = 0.5 * (Y.max(axis=0) - Y.min(axis=0))
-        c = np.fft.rfft(Y[:-1], axis=0)[self.fam.periods] * 2.0 / (Y.shape[0] - 1)
+        c = _fourier_row(Y.shape[0] - 1, self.fam.periods) @ Y[:-1] * 2.0 / (Y.shape[0] - 1)
         S = P.integrator.steps_per_period
+        n = self.n
         return {"param": lam, "state": y, "sections": Y[:-1:S].copy(), "mu": mu, "stable": bool(np.max(np.abs(mu)) < 1.0), "amp": amp,
                 "h1": c, "unstable": _unstable_count(mu), "X": X.copy(), "mode": _copy(mode), "A": A, "Y": Y,
-                "events": int(counters[C_EVENTS])}
+                "events": r.events, "regular": True,
+                # the Jacobian in physical units (the scale changes from point to point)
+                "J": A[:, :n] * self.scale[:, None] / self.scale[None, :] + np.eye(n),
+                "dl": A[:, n] * self.scale / self.span}
 
     def detect(self, a, b, Xa, Ta, mode, index, locate_tol):
-        """The bifurcations between consecutive points ``a`` and ``b``, each located by bisection.
+        """The bifurcations between consecutive points ``a`` and ``b``, each located on the arclength.
 
         A change in the number of multipliers outside the unit circle (fold, period
-        doubling, Neimark-Sacker), and a change in the number of events per orbit: a
-        guard of the orbit touches zero there (a contact that grazes, a slip that comes
-        to rest: **grazing**, including the end of continuous sliding).
+        doubling, Neimark-Sacker: :meth:`_locate_crossing`), and a change in the number of
+        events per orbit: a guard of the orbit touches zero there (a contact that grazes,
+        a slip that comes to rest: **grazing**, including the end of continuous sliding;
+        :meth:`_locate_grazing`).
         """
         found = []
-        for what in ("unstable", "events"):
-            if a[what] == b[what]:
-                continue
-            best = self._bisect(a, b, Xa, Ta, mode, what, locate_tol)
-            if what == "events":
-                found.append(SpecialPoint(kind="grazing", param=best["param"], state=best["state"],
-                                          multiplier=complex(best["mu"][0]), index=index, mode=_copy(best["mode"])))
-                continue
+        if a["unstable"] != b["unstable"]:
+            best = self._locate_crossing(a, b, Xa, Ta, mode, locate_tol)
             mu = best["mu"][np.argmin(np.abs(np.abs(best["mu"]) - 1.0))]
             if abs(mu.imag) > 1e-6 * abs(mu):
                 kind = "neimark-sacker"
@@ -576,30 +718,142 @@ class _Context:
                 kind = "period-doubling" if mu.real < 0 else "fold"
             found.append(SpecialPoint(kind=kind, param=best["param"], state=best["state"], multiplier=complex(mu),
                                       index=index, mode=_copy(best["mode"])))
+        if a["events"] != b["events"]:
+            best = self._locate_grazing(a, b, Xa, Ta, mode, locate_tol)
+            found.append(SpecialPoint(kind="grazing", param=best["param"], state=best["state"],
+                                      multiplier=complex(best["mu"][0]), index=index, mode=_copy(best["mode"])))
         return found
 
-    def _bisect(self, a, b, Xa, Ta, mode, what, locate_tol):
-        """The first point past the change of ``what`` from ``a`` to ``b``, to ``locate_tol`` of arclength."""
-        lo, hi = 0.0, float(np.dot(Ta, b["X"] - Xa))
+    def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian, tol=None, at_value=False):
+        """The branch point between two of its points ``X_lo``, ``X_hi``, a fraction ``theta`` of the way.
+
+        Predicted on the chord between them and corrected with ``A`` as Broyden's first
+        matrix and ``tol`` for :meth:`correct`: on the hyperplane normal to the chord, or
+        with ``at_value`` at the predicted value of the field if the ends have different
+        values. A trial near a grazing point sits on a kink of the branch, where the map's
+        difference in the field straddles the event that appears: the field's column of
+        the Jacobian is then wrong and Newton on the arclength system cycles, while
+        shooting at a fixed value never uses it (the branch may be all but vertical there:
+        measured, ends ``2.7e-4`` apart in the scaled states and ``2e-7`` in the field).
+        Around a fold the field does not move monotonically between the ends, so the
+        hyperplane is needed there. ``(X, mode, A)``, or ``X`` None.
+        """
+        width = np.linalg.norm(X_hi - X_lo)
+        Xp = X_lo + theta * (X_hi - X_lo)
+        normal = (X_hi - X_lo) / width
+        fixed = at_value and abs(X_hi[-1] - X_lo[-1]) > 1e-12 * max(abs(X_hi[-1]), abs(X_lo[-1]))
+        if fixed:
+            normal = np.zeros_like(normal)
+            normal[-1] = 1.0
+        Xm, mm, Am = self.correct(Xp, normal, mode, A, jacobian=jacobian, tol=tol)
+        if Xm is None and not fixed:
+            Xm, mm, Am = self.correct_at_value(Xp, mode, jacobian=jacobian)
+        if Xm is not None and not _between(Xm, X_lo, X_hi):
+            # corrected away from the bracket (a kink of the map, a fold of the branch across
+            # the chord's hyperplane): the location stops at the bracket it has
+            self.why = "a correction inside the bracket left it"
+            return None, mm, None
+        return Xm, mm, Am
+
+    def _locate_crossing(self, a, b, Xa, Ta, mode, locate_tol):
+        """The first point past a change of the number of unstable multipliers from ``a`` to ``b``.
+
+        The test function is ``|mu| - 1`` of the multiplier nearest the unit circle, smooth
+        along the branch: regula falsi with the Illinois modification between the
+        bracket's two corrected points, each trial kept at least half ``locate_tol`` inside
+        it, so the bracket closes to ``locate_tol`` of arclength in a few corrected points
+        where bisection took about twenty; which side a trial lies on is decided by its
+        count of unstable multipliers.
+        """
+        def test(mu):
+            return float(np.abs(mu[np.argmin(np.abs(np.abs(mu) - 1.0))]) - 1.0)
+
+        X_lo, X_hi = Xa, b["X"]
+        A_lo, A_hi = a["A"], b["A"]
+        f_lo, f_hi = test(a["mu"]), test(b["mu"])
         best = b
-        while hi - lo > locate_tol:
-            mid = 0.5 * (lo + hi)
-            Xm, mm, Am = self.correct(Xa + mid * Ta, Ta, mode, a["A"])
-            if Xm is None:
-                Xm, mm, Am = self.correct_at_value(Xa + mid * Ta, mode)
+        last = 0
+        for _ in range(100):
+            width = float(np.linalg.norm(X_hi - X_lo))
+            if width <= locate_tol:
+                break
+            theta = 0.5
+            if f_lo * f_hi < 0.0:
+                theta = f_lo / (f_lo - f_hi)
+            margin = min(0.5 * locate_tol / width, 0.5)
+            theta = min(max(theta, margin), 1.0 - margin)
+            Xm, mm, Am = self._corrected(X_lo, X_hi, theta, mode, A_lo if theta <= 0.5 else A_hi, True)
             if Xm is None:
                 break
-            pm = self.point(Xm, mm, Am)
-            if pm[what] == a[what]:
-                lo = mid
+            mu = self.multipliers(Am)
+            f = test(mu)
+            if _unstable_count(mu) == a["unstable"]:
+                X_lo, A_lo, f_lo = Xm, Am, f
+                if last < 0:
+                    f_hi *= 0.5
+                last = -1
             else:
-                hi, best = mid, pm
-        return best
+                X_hi, A_hi, f_hi = Xm, Am, f
+                best = (Xm, mm, Am)
+                if last > 0:
+                    f_lo *= 0.5
+                last = 1
+        return self.point(*best) if isinstance(best, tuple) else best
+
+    def _locate_grazing(self, a, b, Xa, Ta, mode, locate_tol):
+        """The first point past a change of the number of events per orbit from ``a`` to ``b``, by bisection.
+
+        The count has no smooth test function, so the bracket is halved; each trial needs
+        only its orbit's events (no Jacobian, no multipliers), and its prediction, halfway
+        between the bracket's corrected ends, comes ever closer to the branch. A trial only
+        has to tell on which side of the grazing point it lies, so it is solved to
+        :data:`TRIAL_ACCURACY` of the bracket's width (never looser than the branch's
+        ``tol`` needs less): where the bracket is wide, one or two corrections. The
+        located point is solved to ``tol`` and alone gets its Jacobian.
+        """
+        X_lo, X_hi = Xa, b["X"]
+        best = None
+        while float(np.linalg.norm(X_hi - X_lo)) > locate_tol:
+            trial_tol = max(self.tol, TRIAL_ACCURACY * float(np.linalg.norm(X_hi - X_lo)))
+            for theta in (0.5, 0.25, 0.75):   # a trial right at the grazing point can stall: one beside it
+                Xm, mm, _ = self._corrected(X_lo, X_hi, theta, mode, a["A"], False, trial_tol, at_value=True)
+                if Xm is not None:
+                    break
+            if Xm is None:
+                break
+            if self.events == a["events"]:
+                X_lo = Xm
+            else:
+                X_hi, best = Xm, (Xm, mm)
+        if best is not None:
+            Xb, mb = best
+            r, _ = self.residual(Xb, mb)
+            if float(np.max(np.abs(r))) > self.tol:
+                d = X_hi - X_lo
+                Xb, mb, A = self.correct(Xb, d / np.linalg.norm(d), mb, a["A"])
+            else:
+                A = self._jacobian_at(Xb, mb)
+            if Xb is not None and A is not None:
+                return self.point(Xb, mb, A)
+        return b
 
 
-def _key(mode):
-    """A hashable form of a mode (an int, or the per-contact kernel's array)."""
-    return tuple(np.atleast_1d(mode).tolist())
+_FOURIER: dict = {}
+
+
+def _fourier_row(m: int, k: int) -> np.ndarray:
+    """``exp(-2 pi i k j / m)``, ``j = 0 .. m - 1``: the ``k``-th coefficient of an ``m``-sample DFT as one
+    product (the branch needs one harmonic per point, not the whole transform)."""
+    if (m, k) not in _FOURIER:
+        _FOURIER[(m, k)] = np.exp(-2j * np.pi * k * np.arange(m) / m)
+    return _FOURIER[(m, k)]
+
+
+def _between(X, X_lo, X_hi) -> bool:
+    """Whether ``X`` lies strictly between two points: nearer to each than they are to each other."""
+    width = np.linalg.norm(X_hi - X_lo)
+    d_lo, d_hi = np.linalg.norm(X - X_lo), np.linalg.norm(X - X_hi)
+    return bool(min(d_lo, d_hi) > 1e-6 * width and max(d_lo, d_hi) < width)
 
 
 def _unstable_count(mu) -> int:
