@@ -254,6 +254,44 @@ def test_the_folds_of_a_hardening_contact_resonance_bound_the_hysteresis_of_swee
     assert low - 0.25 < down[jump] <= grazing + 0.5
 
 
+def _sweep_amplitudes(cfg, values, periods=400):
+    """A warm-started sweep: the first-harmonic amplitude of x1 after ``periods`` at each value."""
+    ig0 = make_integrator(cfg.build())
+    y, mode, out = None, None, []
+    for w in values:
+        ig = ig0.with_parameters(type(cfg).model_validate({**cfg.model_dump(), "omega": float(w)}).build())
+        if y is None:
+            y = ig.initial_state()
+            mode = ig.mode_of(y)
+        status, mode, _ = ig.advance(y, mode, 0, periods)
+        assert status == 0
+        rec = ig.record_buffer(ig.steps_per_period + 1)
+        ig.advance(y.copy(), mode, 0, 1, n_transient=0, record=rec)
+        x = rec[1][:-1, 0]
+        out.append(abs(2 * np.fft.rfft(x)[1] / x.size))
+    return np.array(out)
+
+
+def test_the_small_hysteresis_of_the_bilinear_pair_bounds_the_sweeps():
+    """Near 398.4 rad/s the bilinear pair's branch folds twice (the middle stretch unstable, its amplitude 0.05 %
+    above the lower one): continuation finds both folds, and warm-started sweeps 0.02 rad/s apart, up and down,
+    follow different arms exactly between the sweep values around the folds, and agree to 1e-10 outside. (The previous corrector stalled at 368.51 rad/s on its
+    way up and never got here.)"""
+    cfg = BladePair(friction="bilinear")
+    b = continuation(cfg, "omega", 397.5, 399.5, ds_max=0.02)
+    folds = sorted(p.param for p in b.points("fold"))
+    assert len(folds) == 2 and b.message.startswith("reached")
+    low, high = folds
+    assert 0.05 < high - low < 0.2 and not np.all(b.stable)
+    values = np.round(np.arange(np.floor(low * 50) / 50 - 0.04, high + 0.06, 0.02), 4)
+    approach = np.linspace(396.0, values[0], 6)[:-1]
+    up = _sweep_amplitudes(cfg, [*approach, *values])[len(approach):]
+    down = _sweep_amplitudes(cfg, [*(2 * values[-1] - approach), *values[::-1]])[len(approach):][::-1]
+    apart = np.abs(up - down) / up > 1e-5
+    assert np.all(apart == ((values > low) & (values < high)))
+    assert np.all(np.abs(up - down)[~apart] < 1e-10 * up[~apart])
+
+
 def test_a_branch_plot_overlaid_on_a_sweep(tmp_path, capsys):
     """``continue --overlay``: a sweep's stored first harmonics drawn on the branch plot; at the branch's first
     value (gamma = 7.2, period 1 only) the sweep's amplitude from rest equals the branch's to 1e-6; a sweep of

@@ -36,9 +36,9 @@ def _report(label, b, t):
 def frf_pair():
     """Both laws, omega from 225 to 405 rad/s (the paper's 290 inside).
 
-    From 200 or up to 1400 rad/s the Coulomb branch stops at 222.30 and 411.30 rad/s (the
-    corrections stall at a scaled residual of 2e-5 and the step falls below ``ds_min``); the
-    bilinear branch stops the same way at 368.51 rad/s.
+    Both branches reach 200 rad/s; above, the bilinear one reaches 430 rad/s and the Coulomb
+    one stops at a fold at 420.683 rad/s (its corrections stall at a scaled residual of 3e-5
+    and the step falls below ``ds_min``); docs/orbits.md.
     """
     fig = Figure(figsize=(9, 3.6))
     for j, law in enumerate(("coulomb", "bilinear")):
