@@ -190,6 +190,11 @@ def test_the_period_doubled_branch_of_the_bilinear_pair():
     assert b2.periods == 2 and b2.params[0] == pd.param
     folds = b2.points("fold")
     assert folds and min(f.param for f in folds) < pd.param
+    # every change of stability is a bifurcation, a multiplier on the unit circle: none is a jump to another arm
+    # (Broyden's damped corrections once landed on the stable arm from the unstable one near gamma = 7.2936)
+    changes = [q for q in b2.special if q.kind != "grazing"]
+    assert [q.kind for q in changes] == ["fold", "fold", "period-doubling"]
+    assert all(abs(abs(q.multiplier) - 1) < 1e-3 for q in changes)
     ok = np.flatnonzero(b2.stable & (b2.params < pd.param - 0.01))
     assert ok.size
     k = ok[len(ok) // 2]

@@ -418,14 +418,21 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
                 break
             h /= 2
             continue
-        jumped = False
         if secant:   # the difference quotients there may straddle the kink: the secant is the tangent
             T_new = (X_new - X) / np.linalg.norm(X_new - X)
         else:
             T_new = _tangent(A_new, T)
         new = ctx.point(X_new, m_new, A_new)
         new["regular"] = not secant
-        special += ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
+        found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
+        if not jumped and h / 2 >= ds_min and any(_off_circle(q) for q in found):
+            # the stability changed, but no multiplier lies on the unit circle where the change is
+            # located: the correction landed on another arm of the branch (measured on the bilinear
+            # pair's period-2 branch, from an unstable arm to a stable one); a shorter step
+            h /= 2
+            continue
+        jumped = False
+        special += found
         pts.append(new)
         # each state scaled by its excursion on the newest orbit: amplitudes that grow a
         # hundredfold through a resonance do not shrink the steps a hundredfold
@@ -847,6 +854,11 @@ def _fourier_row(m: int, k: int) -> np.ndarray:
     if (m, k) not in _FOURIER:
         _FOURIER[(m, k)] = np.exp(-2j * np.pi * k * np.arange(m) / m)
     return _FOURIER[(m, k)]
+
+
+def _off_circle(p: SpecialPoint) -> bool:
+    """A fold, period doubling or Neimark-Sacker point whose critical multiplier is not on the unit circle."""
+    return p.kind != "grazing" and abs(abs(p.multiplier) - 1.0) > 0.05
 
 
 def _between(X, X_lo, X_hi) -> bool:
