@@ -159,6 +159,24 @@ def tangent_sum(y, V, h, tab, o, count, K, dK, out_y, out_V):
                 out_V[i, m + 1] += wq * K[q, i]
 
 
+def queue_whole_steps(mode, k, pending, pend_mode, t, y, h, p, tab, ident, dp, K, Y, dK, dY, Jy, Jp, Jt, y1, V1, JyA,
+                      fp, M, have_M, Vs, WP):
+    """Queue ``k`` whole steps of the affine ``mode`` for the state columns ``Vs``, applied as ``M^k`` when the
+    run ends: builds the mode's ``M`` on first use (one differentiated step from the identity) and applies
+    a pending run of another mode first. Returns the new ``(pending, pend_mode)``."""
+    n = Vs.shape[0]
+    if have_M[mode] == 0:
+        tangent_step(mode, t, y, h, p, tab, ident, False, dp, K, Y, dK, dY, Jy, Jp, Jt, y1, V1, True, JyA[mode], fp)
+        for i in range(n):
+            for c in range(n):
+                M[mode, 0, i, c] = V1[i, c]
+        have_M[mode] = 1
+    if pending > 0 and pend_mode != mode:
+        power_apply(M, have_M, pend_mode, pending, Vs, WP)
+        pending = 0
+    return pending + k, mode
+
+
 def step_tangent(out_V, dt_a, dt_b, V):
     """``V = Phi_y V + Phi_t0 dt_a + Phi_h (dt_b - dt_a)`` from :func:`tangent_step`'s ``out_V``."""
     n = V.shape[0]
@@ -376,18 +394,8 @@ def replay_tangent(y, mode, p, period, steps_per_period, start_period, end_perio
             # state the record's
             g_ev = n_steps if ie >= n_log else skip_to(log_t[ie], g, n_steps, period, start_period,
                                                        steps_per_period, h)
-            if have_M[mode] == 0:
-                tangent_step(mode, t, y, h, p, tab, ident, False, dp, K, Y, dK, dY, Jy, Jp, Jt, y1, V1, True,
-                             JyA[mode], fp)
-                for i in range(n):
-                    for k in range(n):
-                        M[mode, 0, i, k] = V1[i, k]
-                have_M[mode] = 1
-            if pending > 0 and pend_mode != mode:
-                power_apply(M, have_M, pend_mode, pending, Vs, WP)
-                pending = 0
-            pend_mode = mode
-            pending += g_ev - g
+            pending, pend_mode = queue_whole_steps(mode, g_ev - g, pending, pend_mode, t, y, h, p, tab, ident, dp, K,
+                                                   Y, dK, dY, Jy, Jp, Jt, y1, V1, JyA, fp, M, have_M, Vs, WP)
             for i in range(N):
                 y[i] = rec_y[g_ev, i]
             per = start_period + (g_ev - 1) // steps_per_period
@@ -401,18 +409,8 @@ def replay_tangent(y, mode, p, period, steps_per_period, start_period, end_perio
             te = log_t[ie] if event else t_end
             aff = affine_jacobian(mode, t, y, p, Jy, Jp, Jt, JyA, known)
             if whole and not event and te > t and aff:
-                if have_M[mode] == 0:
-                    tangent_step(mode, t, y, h, p, tab, ident, False, dp, K, Y, dK, dY, Jy, Jp, Jt, y1, V1, True,
-                                 JyA[mode], fp)
-                    for i in range(n):
-                        for k in range(n):
-                            M[mode, 0, i, k] = V1[i, k]
-                    have_M[mode] = 1
-                if pending > 0 and pend_mode != mode:
-                    power_apply(M, have_M, pend_mode, pending, Vs, WP)
-                    pending = 0
-                pend_mode = mode
-                pending += 1
+                pending, pend_mode = queue_whole_steps(mode, 1, pending, pend_mode, t, y, h, p, tab, ident, dp, K, Y,
+                                                       dK, dY, Jy, Jp, Jt, y1, V1, JyA, fp, M, have_M, Vs, WP)
                 if use_p:
                     tangent_step(mode, t, y, te - t, p, tab, Vp, True, dp, K, Y, dK, dY, Jy, Jp, Jt, y1, V1, True,
                                  JyA[mode], fp)
