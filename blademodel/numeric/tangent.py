@@ -26,7 +26,7 @@ from .methods import get_method
 
 _TEMPLATE_FUNCTIONS = ("flow_jacobian", "flow_partials", "guard_gradient", "reset_jacobian", "tangent_step",
                        "tangent_sum", "power_apply", "queue_whole_steps", "step_tangent", "event_time_tangent",
-                       "reset_tangent", "skip_to", "same_state", "affine_jacobian", "replay_tangent")
+                       "reset_tangent", "skip_to", "kernel_step", "same_state", "affine_jacobian", "replay_tangent")
 
 
 class SensitivityError(RuntimeError):

@@ -266,6 +266,16 @@ def skip_to(te, g, n_steps, period, start_period, steps_per_period, h):
     return n_steps
 
 
+def kernel_step(mode, t, y, h, p, ktab, k1, k2, k3, k4, tmp, y1, KK):
+    """Step ``y`` in place exactly as the kernel does: its fused RK4 (``ktab`` empty) or its tableau."""
+    if ktab.shape[0] == 0:
+        rk4_step(mode, t, y, h, p, k1, k2, k3, k4, tmp, y1)  # noqa: F821
+    else:
+        rk_step(mode, t, y, h, p, k1, k2, k3, k4, tmp, y1, ktab, KK)  # noqa: F821
+    for i in range(y.shape[0]):
+        y[i] = y1[i]
+
+
 def same_state(y, rec_y, k):
     """Whether the replay's state ``y`` is the kernel's recorded row ``k`` (to ``1e-9`` of the row's size), made equal."""
     N = y.shape[0]
@@ -421,12 +431,7 @@ def replay_tangent(y, mode, p, period, steps_per_period, start_period, end_perio
                     for i in range(N):
                         y[i] = rec_y[kg, i]
                 else:
-                    if ktab.shape[0] == 0:
-                        rk4_step(mode, t, y, te - t, p, k1, k2, k3, k4, tmp, y1)  # noqa: F821
-                    else:
-                        rk_step(mode, t, y, te - t, p, k1, k2, k3, k4, tmp, y1, ktab, KK)  # noqa: F821
-                    for i in range(N):
-                        y[i] = y1[i]
+                    kernel_step(mode, t, y, te - t, p, ktab, k1, k2, k3, k4, tmp, y1, KK)
                 t = t_end
                 break
             whole = False
@@ -436,12 +441,7 @@ def replay_tangent(y, mode, p, period, steps_per_period, start_period, end_perio
             if te > t:
                 tangent_step(mode, t, y, te - t, p, tab, V, use_p, dp, K, Y, dK, dY, Jy, Jp, Jt, y1, V1, aff,
                              JyA[mode], fp)
-                if ktab.shape[0] == 0:
-                    rk4_step(mode, t, y, te - t, p, k1, k2, k3, k4, tmp, y1)  # noqa: F821
-                else:
-                    rk_step(mode, t, y, te - t, p, k1, k2, k3, k4, tmp, y1, ktab, KK)  # noqa: F821
-                for i in range(N):
-                    y[i] = y1[i]
+                kernel_step(mode, t, y, te - t, p, ktab, k1, k2, k3, k4, tmp, y1, KK)
                 if event:
                     if not event_time_tangent(mode, log_guard[ie], te, y, p, V1, dt, V, use_p, dp, gy, gp,
                                               dt_b):
