@@ -17,6 +17,11 @@ scaled residual of ``1e-10``, with its bifurcations located; its step is capped 
 * *adaptive*: the same, each value from the previous value's last state (a warm start):
   the cheapest honest sweep.
 
+The 200 periods of the fixed sweep do not reach the accuracy everywhere (slow settling
+near a period doubling): a fixed sweep that does needs the transient of the slowest point
+that settles from rest. It is not run; its cost is the measured fixed sweep's scaled by
+the periods (the cost of a sweep is proportional to the periods it integrates).
+
 Reported: the first-harmonic amplitudes of ``x1`` of each against the continuation's,
 the periods integrated, and the CPU time (thread time, repeats interleaved, minimum),
 also of the continuation with the period map differentiated by central differences
@@ -67,7 +72,10 @@ class _Integrators:
         return self.first.with_parameters(model)
 
 
-def by_fixed_sweep(cfg, values, transient=200):
+FIXED_TRANSIENT = 200
+
+
+def by_fixed_sweep(cfg, values, transient=FIXED_TRANSIENT):
     """Each value from rest, ``transient`` periods, then one period recorded: ``(harmonics, periods)``."""
     harmonics = []
     igs = _Integrators(cfg)
@@ -90,8 +98,8 @@ def _harmonic(ig, y, mode):
 
 def by_sweep(cfg, values, scale, warm=True):
     """Each value from the last one's state (``warm``) or from rest, until successive Poincaré samples agree to
-    TOL of the scale."""
-    y, mode, periods, harmonics = None, None, 0, []
+    TOL of the scale: ``(harmonics, periods integrated at each value)``."""
+    y, mode, periods, harmonics = None, None, [], []
     igs = _Integrators(cfg)
     for w in values:
         ig = igs.at(w)
@@ -99,16 +107,17 @@ def by_sweep(cfg, values, scale, warm=True):
             y = np.zeros(ig.n_state)
             mode = ig.mode_of(y)
         prev = y[:scale.size].copy()
+        periods.append(0)
         for k in range(MAX_PERIODS):   # a point that never settles (a period-2 attractor) stops here
             status, mode, _ = ig.advance(y, mode, 0, 1)
-            periods += 1
+            periods[-1] += 1
             if status != 0:
                 raise RuntimeError(f"integration failed at omega = {w}")
             if np.max(np.abs(y[:scale.size] - prev) / scale) <= TOL:
                 break
             prev = y[:scale.size].copy()
         harmonics.append(_harmonic(ig, y, mode))
-    return np.array(harmonics), periods
+    return np.array(harmonics), np.array(periods)
 
 
 def main() -> int:
@@ -127,7 +136,11 @@ def main() -> int:
         scale = np.max(np.abs(branch.states), axis=0)
         scale = np.maximum(scale, 1e-3 * scale.max())
         h_sweep, periods = by_sweep(cfg, values, scale)
-        h_rest, periods_rest = by_sweep(cfg, values, scale, warm=False)
+        h_rest, rest_each = by_sweep(cfg, values, scale, warm=False)
+        periods, periods_rest = int(periods.sum()), int(rest_each.sum())
+        # the transient a fixed sweep needs for every point to reach the accuracy: the slowest from-rest
+        # point that settles (points that never settle, on unstable period-1 orbits, left out)
+        need = int(rest_each[rest_each < MAX_PERIODS].max())
         h_fixed, periods_fixed = by_fixed_sweep(cfg, values)
         i = branch.state_names.index("x1")
         inside = (branch.params >= START) & (branch.params <= STOP)
@@ -144,13 +157,16 @@ def main() -> int:
                                "fixed": lambda: by_fixed_sweep(cfg, values)}, args.repeats)
         t_c, t_s, t_f = min(times["continuation"]), min(times["sweep"]), min(times["fixed"])
         t_r = min(times["rest"])
+        # that fixed sweep, costed from the measured one (its cost is proportional to the periods integrated)
+        t_u = t_f * (need + 1) / (FIXED_TRANSIENT + 1)
         t_d = min(times["differences"])
         rows.append({"law": law, "points": len(values), "unstable": int(np.sum(~stable)),
                      "special": len(branch.special), "agree": agree, "agree_median": agree_median,
                      "agree_fixed": agree_fixed, "agree_rest": agree_rest, "t_differences": t_d,
                      "tangent_gain": t_d / t_c, "sweep_periods": periods, "rest_periods": periods_rest,
                      "fixed_periods": periods_fixed, "t_cont": t_c, "t_sweep": t_s, "t_rest": t_r,
-                     "t_fixed": t_f, "ratio": t_s / t_c, "ratio_rest": t_r / t_c, "ratio_fixed": t_f / t_c})
+                     "t_fixed": t_f, "ratio": t_s / t_c, "ratio_rest": t_r / t_c, "ratio_fixed": t_f / t_c,
+                     "uniform_transient": need, "t_uniform": t_u, "ratio_uniform": t_u / t_c})
         results[law] = {"omega": values, "harmonic_continuation": h_cont, "harmonic_sweep": h_sweep,
                         "harmonic_rest": h_rest, "harmonic_fixed": h_fixed, "stable": stable,
                         "special": [(p.kind, p.param) for p in branch.special]}
@@ -165,13 +181,18 @@ def main() -> int:
                          ("sweep_periods", "adaptive periods", "d"), ("rest_periods", "from-rest periods", "d"),
                          ("fixed_periods", "fixed periods", "d"), ("t_cont", "continuation s", ".2f"),
                          ("t_sweep", "adaptive s", ".2f"), ("t_rest", "from rest s", ".2f"), ("t_fixed", "fixed s", ".2f"),
-                         ("ratio_fixed", "fixed / cont.", ".2f"), ("ratio_rest", "from rest / cont.", ".2f"),
+                         ("ratio_fixed", "fixed / cont.", ".2f"), ("uniform_transient", "transient for the accuracy", "d"),
+                         ("ratio_uniform", "that fixed sweep / cont.", ".2f"), ("ratio_rest", "from rest / cont.", ".2f"),
                          ("ratio", "adaptive / cont.", ".2f"), ("tangent_gain", "differences / tangent", ".2f")]))
     print("(H1 agreement over the stable points, largest and median; an unstable orbit is not what a sweep lands "
           "on. 'differences / tangent': the same continuation with the period map differentiated by central "
           "differences instead of its tangent)")
-    for name, key in (("fixed-transient", "ratio_fixed"), ("from-rest adaptive", "ratio_rest"),
-                      ("adaptive warm-started", "ratio")):
+    print("('transient for the accuracy': the periods the slowest point that settles needs from rest; a fixed "
+          "sweep with that transient is costed from the measured 200-period one, its cost being proportional to "
+          "the periods)")
+    for name, key in (("fixed-transient (200 periods)", "ratio_fixed"),
+                      ("fixed-transient with the transient the accuracy needs", "ratio_uniform"),
+                      ("from-rest adaptive", "ratio_rest"), ("adaptive warm-started", "ratio")):
         worst = min(r[key] for r in rows)
         print(f"Goal continuation >= {GOAL:g} x cheaper than the {name} sweep: "
               f"{'MET' if worst >= GOAL else 'MISSED'} (worst {worst:.2f} x)")
