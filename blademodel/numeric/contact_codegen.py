@@ -33,6 +33,12 @@ _ENTRY_POINTS = ("integrate", "initial_modes", "rhs", "factor_stick", "contact_f
 #: reference counting may only return an array it was given).
 _VIEWS = ("vec", "wvec", "wdof", "wrow", "law_offset")
 
+#: Functions inlined by LLVM at every call site (``forceinline``): each is called once per step or
+#: evaluation, from one or two places (``contact_forces``, ``rates``, ``guards_of_forces`` and
+#: ``guard_rates`` from ``evaluate``), and a call passes every array argument as 7 to 11 words.
+_FORCEINLINE = ("contact_forces", "rates", "guards_of_forces", "guard_rates", "rk4_step", "mark_seeds",
+                "copy_all_guards")
+
 
 def template_functions(module) -> list[str]:
     """Names of the functions a template defines, in source order."""
@@ -119,7 +125,7 @@ def generate_contact_kernel(laws: list[FrictionLaw]) -> tuple[str, dict]:
            for f in ("force", "rates", "guards", "guard_rates", "force_rate", "transition", "energy",
                       "dissipation")]
     for fn in (*fns, *_DISPATCH, *functions):
-        inline = ", inline='always'" if fn in _VIEWS else ""
+        inline = ", inline='always'" if fn in _VIEWS else ", forceinline=True" if fn in _FORCEINLINE else ""
         # Only entry points are called from Python: the others need no CPython or C wrapper, and neither
         # module optimization nor machine code of their own (linked_only: the entry points compile them).
         cache = ("cache=True, " if fn in _ENTRY_POINTS else
