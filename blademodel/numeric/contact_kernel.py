@@ -41,7 +41,7 @@ def _code_version() -> str:
     here = PACKAGE / "numeric"
     return hash_sources([Path(m.__file__) for m in TEMPLATES]
                         + [here / n for n in ("contact_rigid_stubs.py", "contact_codegen.py", "law_codegen.py",
-                                              "contract.py", "linked_only.py")]
+                                              "contract.py", "code_libraries.py")]
                         + package_sources("components/friction"))
 
 
