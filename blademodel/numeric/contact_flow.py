@@ -201,6 +201,12 @@ def contact_forces(t, y, cm, I, R, WI, WF):
     return power
 
 
+def forces(t, y, cm, I, R, WI, WF):
+    """``contact_forces`` for Python (an entry point: ``contact_forces`` itself is only inlined where the kernel
+    calls it, and compiled as an entry point only when Python asks for the forces)."""
+    contact_forces(t, y, cm, I, R, WI, WF)
+
+
 def penetration_acceleration(j, F, invm, cidx, cgn):
     """``d2delta/dt2`` of contact ``j`` from the generalized forces ``F``."""
     s = 0.0
@@ -223,7 +229,8 @@ def rhs_guards(t, y, cm, I, R, WI, WF, out, G):
 
 
 #: What ``evaluate`` computes besides the forces (bits of ``what``): ``dy/dt``, the guards, their rates (from
-#: ``dy/dt`` in ``out``), with the rates of rigid stick forces.
+#: ``dy/dt`` in ``out``), with the rates of rigid stick forces. Passed as ``EV_X | runtime(0)``: a constant
+#: would compile a copy of ``evaluate`` per set of flags, ``runtime(EV_X)`` a copy of ``runtime``.
 EV_RATES, EV_GUARDS, EV_GUARD_RATES, EV_STICK = 1, 2, 4, 8
 #: ``dy/dt``, the guards and their rates.
 EV_ALL = 7
@@ -307,7 +314,7 @@ def rk4_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1):
     full, nsa = active_rows(WI, y.shape[0])
     rows = wrow(WI, nc, n, y.shape[0], 1 if full else 0)
     k1, k2, k3, k4, tmp = SC[0], SC[1], SC[2], SC[3], SC[4]
-    ev = runtime(EV_RATES)   # the stage buffer SC stands in for the guards, which are not asked for
+    ev = EV_RATES | runtime(0)   # the stage buffer SC stands in for the guards, which are not asked for
     if not have_k1:
         evaluate(t, y, cm, I, R, WI, WF, k1, SC, SC, ev)
     for ii in range(nsa):
@@ -344,7 +351,7 @@ def rk_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1):
     ob = o + s * s
     oc = ob + s
     tmp = SC[4]
-    ev = runtime(EV_RATES)
+    ev = EV_RATES | runtime(0)
     if not have_k1:
         evaluate(t, y, cm, I, R, WI, WF, SC[0], SC, SC, ev)
     for st in range(1, s):

@@ -47,7 +47,7 @@ def normal_guard_rate(j, mode, nk, dd, Nd, dy, n, cidx, cgn, ck, cc):
 
 def eval_guards(t, y, cm, I, R, WI, WF, G):
     """The active contacts' guards into ``G[j, :]``: 0 the normal law's (``normal_guard``), then the law's."""
-    evaluate(t, y, cm, I, R, WI, WF, y, G, G, runtime(EV_GUARDS))  # noqa: F821
+    evaluate(t, y, cm, I, R, WI, WF, y, G, G, EV_GUARDS | runtime(0))  # noqa: F821
 
 
 def guards_of_forces(y, cm, I, R, WI, WF, G):

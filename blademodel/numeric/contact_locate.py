@@ -23,7 +23,7 @@ def locate_trial(t, y, dt, frac, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counter
     """
     spent = rk_step(t, y, frac * dt, cm, I, R, WI, WF, SC, ymid, True)  # noqa: F821
     # SC[4]: the stages' scratch, free now
-    evaluate(t + frac * dt, ymid, cm, I, R, WI, WF, SC[4], Gm, Dm, runtime(EV_ALL | EV_STICK))  # noqa: F821
+    evaluate(t + frac * dt, ymid, cm, I, R, WI, WF, SC[4], Gm, Dm, EV_ALL | EV_STICK | runtime(0))  # noqa: F821
     counters[C_LOCATION_SUBSTEPS] += 1
     counters[C_RHS] += spent + 1
     suspects_at(t + frac * dt, I, WI, WF)  # noqa: F821

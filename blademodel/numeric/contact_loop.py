@@ -111,11 +111,11 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
     while t < t_end:
         dt = t_end - t
         if not g0_valid:
-            evaluate(t, y, cm, I, R, WI, WF, SC[0], G0, D0, runtime(EV_ALL | EV_STICK))  # noqa: F821
+            evaluate(t, y, cm, I, R, WI, WF, SC[0], G0, D0, EV_ALL | EV_STICK | runtime(0))  # noqa: F821
             counters[C_RHS] += 1
         if not (first and reuse):
             spent = rk_step(t, y, dt, cm, I, R, WI, WF, SC, y1, True)  # noqa: F821
-            evaluate(t_end, y1, cm, I, R, WI, WF, knext, G1, D1, runtime(EV_ALL))  # noqa: F821
+            evaluate(t_end, y1, cm, I, R, WI, WF, knext, G1, D1, EV_ALL | runtime(0))  # noqa: F821
             counters[C_RHS] += spent + 1
         if first and y.shape[0] > n_law:
             for k in range(3):
@@ -126,7 +126,7 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
         if code >= 0 and stick_rates_known(I, WI):  # noqa: F821
             # the stick guards' rates at both ends (kept without them on a step with no event)
             guard_rates(y1, knext, cm, I, R, WI, WF, D1, runtime(True))  # noqa: F821
-            evaluate(t, y, cm, I, R, WI, WF, SC[0], G0, D0, runtime(EV_GUARD_RATES | EV_STICK))  # noqa: F821
+            evaluate(t, y, cm, I, R, WI, WF, SC[0], G0, D0, EV_GUARD_RATES | EV_STICK | runtime(0))  # noqa: F821
             counters[C_RHS] += 1
         sub = dt   # the sub-step whose end lies past the event
         if code < 0 and detect_grazing:
@@ -188,7 +188,7 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
     if not end_valid:
         # the last event fell on the step's end: the state, its rate and the guards there, after it
         copy_rows(WI, nc, n, y1, y)  # noqa: F821
-        evaluate(t, y, cm, I, R, WI, WF, knext, G1, D1, runtime(EV_ALL))  # noqa: F821
+        evaluate(t, y, cm, I, R, WI, WF, knext, G1, D1, EV_ALL | runtime(0))  # noqa: F821
         counters[C_RHS] += 1
     return STATUS_OK, t
 
@@ -205,10 +205,10 @@ def whole_step(t, t_end, y, cm, I, R, WI, WF, SC, GS, g0_valid, width, detect_gr
     y1, knext = SC[5], SC[8]
     G0, G1, D0, D1 = GS[0], GS[1], GS[4], GS[5]
     if not g0_valid:
-        evaluate(t, y, cm, I, R, WI, WF, SC[0], G0, D0, runtime(EV_ALL | EV_STICK))  # noqa: F821
+        evaluate(t, y, cm, I, R, WI, WF, SC[0], G0, D0, EV_ALL | EV_STICK | runtime(0))  # noqa: F821
         counters[C_RHS] += 1
     spent = rk_step(t, y, t_end - t, cm, I, R, WI, WF, SC, y1, True)  # noqa: F821
-    evaluate(t_end, y1, cm, I, R, WI, WF, knext, G1, D1, runtime(EV_ALL))  # noqa: F821
+    evaluate(t_end, y1, cm, I, R, WI, WF, knext, G1, D1, EV_ALL | runtime(0))  # noqa: F821
     counters[C_RHS] += spent + 1
     return mark_seeds(cm, I, WI, G0, G1, D0, D1, t_end - t, width, detect_grazing)  # noqa: F821
 
