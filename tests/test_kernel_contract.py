@@ -70,3 +70,27 @@ def test_a_friction_problem_left_unresolved_is_a_named_status():
     assert status == contract.STATUS_FRICTION_UNRESOLVED and t > 0
     r = simulate(cfg.build(), periods=20, raise_on_error=False)
     assert r.status == contract.STATUS_OK and r.counters["friction_pivots"] > 0
+
+
+def test_internal_functions_are_only_linked_and_entry_points_internalize(tmp_path, monkeypatch):
+    """The kernel's functions without a Python wrapper get a code library that is only linked (no module
+    optimization, no machine code of their own), an entry point called from Python only one that makes what it
+    links internal (blademodel.numeric.code_libraries); the forces are those of the equations."""
+    from blademodel.numeric import code_libraries
+    assert code_libraries.SUPPORTED   # else both pipelines fall back to Numba's (correct, slower to compile)
+    monkeypatch.setenv("BLADEMODEL_CACHE_DIR", str(tmp_path))   # compiled here, not loaded from a cache
+    contact_kernel._MEMO.clear()
+    integ = ContactIntegrator(BladedDisk(blades=3, friction="none").build(), check_stability=False)
+    y = integ.initial_state()
+    y[0] = 1e-3
+    N, f = integ.contact_forces(0.0, y, np.ones(integ.nc, dtype=np.int64))
+    contact_kernel._MEMO.clear()
+
+    def library(fn):
+        return next(iter(fn.overloads.values())).library
+    assert isinstance(library(integ.module.contact_forces), code_libraries.LinkedOnlyLibrary)
+    assert isinstance(library(integ.module.forces), code_libraries.EntryPointLibrary)
+    t = integ.tables
+    delta = [sum(t.cgn[j, k] * y[t.cidx[j, k]] for k in range(4) if t.cidx[j, k] >= 0) - t.cgap[j]
+             for j in range(integ.nc)]
+    assert np.allclose(N, t.ck * np.array(delta), rtol=1e-14, atol=0.0) and not f.any()

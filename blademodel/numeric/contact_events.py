@@ -15,9 +15,9 @@ from blademodel.numeric.contract import (WC_ALL, NONNEG, C_EVENTS, C_FRICTION_PI
 SLIP_SIGN_TOL = 1e-9
 
 
-def apply_transition(t, y, cm, j, gi, I, R, WI, WF):
-    """Fire guard ``gi`` of contact ``j`` at ``(t, y)``; returns the new mode."""
-    contact_forces(t, y, cm, I, R, WI, WF)  # noqa: F821
+def apply_transition(t, y, cm, j, gi, I, R, WI, WF, G):
+    """Fire guard ``gi`` of contact ``j`` at ``(t, y)``; returns the new mode (``G``: guard scratch, not touched)."""
+    evaluate(t, y, cm, I, R, WI, WF, y, G, G, runtime(0))  # noqa: F821 (the forces only)
     K = I[I[O_CLAW] + j]
     return law_transition(K, cm[j], gi, WF[I[F_N] + j], WF[I[F_ND] + j], WF[I[F_V] + j],  # noqa: F821
                           WF[I[F_FR] + j], y, law_offset(I, j), R, I, j,  # noqa: F821
@@ -179,6 +179,6 @@ def initial_modes(t, y, cm, I, R, WI, WF, G, counters, max_pivots, e, ei):
     eval_guards(t, y, cm, I, R, WI, WF, G)  # noqa: F821
     for j in range(nc):
         if G[j, 0] >= 0.0 and NG[claw[j], 0] > 0:  # noqa: F821
-            cm[j] = apply_transition(t, y, cm, j, runtime(0), I, R, WI, WF)  # noqa: F821
+            cm[j] = apply_transition(t, y, cm, j, runtime(0), I, R, WI, WF, G)  # noqa: F821
             factor_stick(cm, I, R, WI, WF)  # noqa: F821
     return settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, e, ei, ei, ei, ei, runtime(False))  # noqa: F821

@@ -201,6 +201,12 @@ def contact_forces(t, y, cm, I, R, WI, WF):
     return power
 
 
+def forces(t, y, cm, I, R, WI, WF):
+    """``contact_forces`` for Python (an entry point: ``contact_forces`` itself is only inlined where the kernel
+    calls it, and compiled as an entry point only when Python asks for the forces)."""
+    contact_forces(t, y, cm, I, R, WI, WF)
+
+
 def penetration_acceleration(j, F, invm, cidx, cgn):
     """``d2delta/dt2`` of contact ``j`` from the generalized forces ``F``."""
     s = 0.0
@@ -220,6 +226,35 @@ def rhs_guards(t, y, cm, I, R, WI, WF, out, G):
     """``dy/dt`` into ``out`` and the guards into ``G`` from one evaluation of the forces."""
     rates(y, cm, I, R, WI, WF, out, contact_forces(t, y, cm, I, R, WI, WF))
     guards_of_forces(y, cm, I, R, WI, WF, G)  # noqa: F821
+
+
+#: What ``evaluate`` computes besides the forces (bits of ``what``): ``dy/dt``, the guards, their rates (from
+#: ``dy/dt`` in ``out``), with the rates of rigid stick forces. Passed as ``EV_X | runtime(0)``: a constant
+#: would compile a copy of ``evaluate`` per set of flags, ``runtime(EV_X)`` a copy of ``runtime``.
+EV_RATES, EV_GUARDS, EV_GUARD_RATES, EV_STICK = 1, 2, 4, 8
+#: ``dy/dt``, the guards and their rates.
+EV_ALL = 7
+
+
+def evaluate(t, y, cm, I, R, WI, WF, out, G, D, what):
+    """The forces at ``(t, y)`` and, by the bits of ``what`` (``EV_*``), ``dy/dt`` into ``out``, the guards into
+    ``G`` and their rates into ``D`` (from ``dy/dt`` in ``out``; with the stick forces' rates if ``EV_STICK``).
+
+    The one function through which the kernel evaluates the flow (only the entry
+    point ``rhs`` and the friction problem's pivots call ``contact_forces`` themselves,
+    and ``rhs_guards`` is kept for tests): ``contact_forces``, ``rates``,
+    ``guards_of_forces`` and ``guard_rates`` are inlined here (``forceinline``), once, so
+    an evaluation is one call, not up to six (a call passes each array as seven to
+    eleven words). An argument not asked for is not touched (any array of its type
+    will do: ``what = 0`` computes the forces only).
+    """
+    power = contact_forces(t, y, cm, I, R, WI, WF)
+    if what & EV_RATES:
+        rates(y, cm, I, R, WI, WF, out, power)
+    if what & EV_GUARDS:
+        guards_of_forces(y, cm, I, R, WI, WF, G)  # noqa: F821
+    if what & EV_GUARD_RATES:
+        guard_rates(y, out, cm, I, R, WI, WF, D, (what & EV_STICK) != 0)  # noqa: F821
 
 
 def rates(y, cm, I, R, WI, WF, out, power):
@@ -279,20 +314,21 @@ def rk4_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1):
     full, nsa = active_rows(WI, y.shape[0])
     rows = wrow(WI, nc, n, y.shape[0], 1 if full else 0)
     k1, k2, k3, k4, tmp = SC[0], SC[1], SC[2], SC[3], SC[4]
+    ev = EV_RATES | runtime(0)   # the stage buffer SC stands in for the guards, which are not asked for
     if not have_k1:
-        rhs(t, y, cm, I, R, WI, WF, k1)
+        evaluate(t, y, cm, I, R, WI, WF, k1, SC, SC, ev)
     for ii in range(nsa):
         i = rows[ii] & NONNEG
         tmp[i] = y[i] + 0.5 * h * k1[i]
-    rhs(t + 0.5 * h, tmp, cm, I, R, WI, WF, k2)
+    evaluate(t + 0.5 * h, tmp, cm, I, R, WI, WF, k2, SC, SC, ev)
     for ii in range(nsa):
         i = rows[ii] & NONNEG
         tmp[i] = y[i] + 0.5 * h * k2[i]
-    rhs(t + 0.5 * h, tmp, cm, I, R, WI, WF, k3)
+    evaluate(t + 0.5 * h, tmp, cm, I, R, WI, WF, k3, SC, SC, ev)
     for ii in range(nsa):
         i = rows[ii] & NONNEG
         tmp[i] = y[i] + h * k3[i]
-    rhs(t + h, tmp, cm, I, R, WI, WF, k4)
+    evaluate(t + h, tmp, cm, I, R, WI, WF, k4, SC, SC, ev)
     for ii in range(nsa):
         i = rows[ii] & NONNEG
         out[i] = y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
@@ -315,8 +351,9 @@ def rk_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1):
     ob = o + s * s
     oc = ob + s
     tmp = SC[4]
+    ev = EV_RATES | runtime(0)
     if not have_k1:
-        rhs(t, y, cm, I, R, WI, WF, SC[0])
+        evaluate(t, y, cm, I, R, WI, WF, SC[0], SC, SC, ev)
     for st in range(1, s):
         for ii in range(nsa):
             i = rows[ii] & NONNEG
@@ -328,7 +365,7 @@ def rk_step(t, y, h, cm, I, R, WI, WF, SC, out, have_k1):
                 for ii in range(nsa):
                     i = rows[ii] & NONNEG
                     tmp[i] += a * kq[i]
-        rhs(t + R[oc + st] * h, tmp, cm, I, R, WI, WF, SC[SC_ROWS + st - 1])
+        evaluate(t + R[oc + st] * h, tmp, cm, I, R, WI, WF, SC[SC_ROWS + st - 1], SC, SC, ev)
     for ii in range(nsa):
         i = rows[ii] & NONNEG
         out[i] = y[i]

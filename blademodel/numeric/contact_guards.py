@@ -47,8 +47,7 @@ def normal_guard_rate(j, mode, nk, dd, Nd, dy, n, cidx, cgn, ck, cc):
 
 def eval_guards(t, y, cm, I, R, WI, WF, G):
     """The active contacts' guards into ``G[j, :]``: 0 the normal law's (``normal_guard``), then the law's."""
-    contact_forces(t, y, cm, I, R, WI, WF)  # noqa: F821
-    guards_of_forces(y, cm, I, R, WI, WF, G)
+    evaluate(t, y, cm, I, R, WI, WF, y, G, G, EV_GUARDS | runtime(0))  # noqa: F821
 
 
 def guards_of_forces(y, cm, I, R, WI, WF, G):

@@ -41,7 +41,7 @@ def _code_version() -> str:
     here = PACKAGE / "numeric"
     return hash_sources([Path(m.__file__) for m in TEMPLATES]
                         + [here / n for n in ("contact_rigid_stubs.py", "contact_codegen.py", "law_codegen.py",
-                                              "contract.py")]
+                                              "contract.py", "code_libraries.py")]
                         + package_sources("components/friction"))
 
 
@@ -361,7 +361,7 @@ class ContactIntegrator(Integrator):
         """Normal and friction force of every contact at ``(t, y)`` in modes ``cm``."""
         cm = np.asarray(cm, dtype=np.int64)
         self.module.factor_stick(cm, self.I, self.R, self.WI, self.WF)
-        self.module.contact_forces(float(t), np.asarray(y, dtype=float), cm, self.I, self.R, self.WI, self.WF)
+        self.module.forces(float(t), np.asarray(y, dtype=float), cm, self.I, self.R, self.WI, self.WF)
         N0, f0 = self.I[contract.F_N], self.I[contract.F_FR]
         return self.WF[N0:N0 + self.nc].copy(), self.WF[f0:f0 + self.nc].copy()
 

@@ -22,8 +22,8 @@ def locate_trial(t, y, dt, frac, cm, I, R, WI, WF, SC, ymid, G0, Gm, Dm, counter
     first crossing since the start.
     """
     spent = rk_step(t, y, frac * dt, cm, I, R, WI, WF, SC, ymid, True)  # noqa: F821
-    rhs_guards(t + frac * dt, ymid, cm, I, R, WI, WF, SC[4], Gm)   # noqa: F821 (SC[4]: the stages' scratch, free now)
-    guard_rates(ymid, SC[4], cm, I, R, WI, WF, Dm, runtime(True))  # noqa: F821
+    # SC[4]: the stages' scratch, free now
+    evaluate(t + frac * dt, ymid, cm, I, R, WI, WF, SC[4], Gm, Dm, EV_ALL | EV_STICK | runtime(0))  # noqa: F821
     counters[C_LOCATION_SUBSTEPS] += 1
     counters[C_RHS] += spent + 1
     suspects_at(t + frac * dt, I, WI, WF)  # noqa: F821

@@ -111,13 +111,11 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
     while t < t_end:
         dt = t_end - t
         if not g0_valid:
-            rhs_guards(t, y, cm, I, R, WI, WF, SC[0], G0)  # noqa: F821
-            guard_rates(y, SC[0], cm, I, R, WI, WF, D0, runtime(True))  # noqa: F821
+            evaluate(t, y, cm, I, R, WI, WF, SC[0], G0, D0, EV_ALL | EV_STICK | runtime(0))  # noqa: F821
             counters[C_RHS] += 1
         if not (first and reuse):
             spent = rk_step(t, y, dt, cm, I, R, WI, WF, SC, y1, True)  # noqa: F821
-            rhs_guards(t_end, y1, cm, I, R, WI, WF, knext, G1)  # noqa: F821
-            guard_rates(y1, knext, cm, I, R, WI, WF, D1, runtime(False))  # noqa: F821
+            evaluate(t_end, y1, cm, I, R, WI, WF, knext, G1, D1, EV_ALL | runtime(0))  # noqa: F821
             counters[C_RHS] += spent + 1
         if first and y.shape[0] > n_law:
             for k in range(3):
@@ -128,8 +126,7 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
         if code >= 0 and stick_rates_known(I, WI):  # noqa: F821
             # the stick guards' rates at both ends (kept without them on a step with no event)
             guard_rates(y1, knext, cm, I, R, WI, WF, D1, runtime(True))  # noqa: F821
-            contact_forces(t, y, cm, I, R, WI, WF)  # noqa: F821
-            guard_rates(y, SC[0], cm, I, R, WI, WF, D0, runtime(True))  # noqa: F821
+            evaluate(t, y, cm, I, R, WI, WF, SC[0], G0, D0, EV_GUARD_RATES | EV_STICK | runtime(0))  # noqa: F821
             counters[C_RHS] += 1
         sub = dt   # the sub-step whose end lies past the event
         if code < 0 and detect_grazing:
@@ -165,7 +162,7 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
             gi = code - j * GMAX  # noqa: F821
             unmark_near(j, I, WI)  # noqa: F821
             old = cm[j]
-            cm[j] = apply_transition(t, y, cm, j, gi, I, R, WI, WF)  # noqa: F821
+            cm[j] = apply_transition(t, y, cm, j, gi, I, R, WI, WF, Gs)  # noqa: F821
             WF[I[F_TLAST] + j] = t
             log_event(t, j, gi, old, cm[j], log_t, log_c, log_g, log_from, log_to, counters, recording,  # noqa: F821
                       fired)
@@ -191,8 +188,7 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
     if not end_valid:
         # the last event fell on the step's end: the state, its rate and the guards there, after it
         copy_rows(WI, nc, n, y1, y)  # noqa: F821
-        rhs_guards(t, y, cm, I, R, WI, WF, knext, G1)  # noqa: F821
-        guard_rates(y, knext, cm, I, R, WI, WF, D1, runtime(False))  # noqa: F821
+        evaluate(t, y, cm, I, R, WI, WF, knext, G1, D1, EV_ALL | runtime(0))  # noqa: F821
         counters[C_RHS] += 1
     return STATUS_OK, t
 
@@ -209,12 +205,10 @@ def whole_step(t, t_end, y, cm, I, R, WI, WF, SC, GS, g0_valid, width, detect_gr
     y1, knext = SC[5], SC[8]
     G0, G1, D0, D1 = GS[0], GS[1], GS[4], GS[5]
     if not g0_valid:
-        rhs_guards(t, y, cm, I, R, WI, WF, SC[0], G0)  # noqa: F821
-        guard_rates(y, SC[0], cm, I, R, WI, WF, D0, runtime(True))  # noqa: F821
+        evaluate(t, y, cm, I, R, WI, WF, SC[0], G0, D0, EV_ALL | EV_STICK | runtime(0))  # noqa: F821
         counters[C_RHS] += 1
     spent = rk_step(t, y, t_end - t, cm, I, R, WI, WF, SC, y1, True)  # noqa: F821
-    rhs_guards(t_end, y1, cm, I, R, WI, WF, knext, G1)  # noqa: F821
-    guard_rates(y1, knext, cm, I, R, WI, WF, D1, runtime(False))  # noqa: F821
+    evaluate(t_end, y1, cm, I, R, WI, WF, knext, G1, D1, EV_ALL | runtime(0))  # noqa: F821
     counters[C_RHS] += spent + 1
     return mark_seeds(cm, I, WI, G0, G1, D0, D1, t_end - t, width, detect_grazing)  # noqa: F821
 
@@ -312,15 +306,16 @@ def copy_all_guards(G, Gm, D, Dm):
             D[j, gi] = Dm[j, gi]
 
 
-def record(irec, t, y, cm, I, R, WI, WF, rec_t, rec_y, rec_cm, rec_N, rec_f):
-    """Write record ``irec`` (state, contact modes and, if kept, contact forces)."""
+def record(irec, t, y, cm, I, R, WI, WF, G, rec_t, rec_y, rec_cm, rec_N, rec_f):
+    """Write record ``irec`` (state, contact modes and, if kept, contact forces; ``G``: guard scratch, not
+    touched)."""
     n, nc = y.shape[0], I[H_NC]
     rec_t[irec] = t
     for i in range(n):
         rec_y[irec, i] = y[i]
     keep = rec_N.shape[0] > 0
     if keep:
-        contact_forces(t, y, cm, I, R, WI, WF)  # noqa: F821
+        evaluate(t, y, cm, I, R, WI, WF, y, G, G, runtime(0))  # noqa: F821 (the forces only)
     for j in range(nc):
         rec_cm[irec, j] = cm[j]
         if keep:
@@ -361,7 +356,7 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
     for per in range(start_period, end_period):
         recording = per >= n_transient
         if recording and per == n_transient and irec < rec_t.shape[0]:
-            record(irec, t, y, cm, I, R, WI, WF, rec_t, rec_y, rec_cm, rec_N, rec_f)
+            record(irec, t, y, cm, I, R, WI, WF, GS[2], rec_t, rec_y, rec_cm, rec_N, rec_f)
             irec += 1
         for js in range(steps_per_period):
             t_end = period * per + (js + 1) * h
@@ -390,7 +385,7 @@ def integrate(y, cm, I, R, WI, WF, SC, GS, period, steps_per_period, start_perio
                     counters[C_RECORDS] = irec
                     return STATUS_NONFINITE, t
             if recording and (js + 1) % record_every == 0 and irec < rec_t.shape[0]:
-                record(irec, t, y, cm, I, R, WI, WF, rec_t, rec_y, rec_cm, rec_N, rec_f)
+                record(irec, t, y, cm, I, R, WI, WF, GS[2], rec_t, rec_y, rec_cm, rec_N, rec_f)
                 irec += 1
         if recording:
             for i in range(n):
