@@ -164,7 +164,9 @@ def test_ring_mode_derives_quickly_and_holds_both_stick_constraints(ring):
     t0 = time.perf_counter()
     ms = derive_mode(ring, {"c1": "stick", "c2": "stick"})
     elapsed = time.perf_counter() - t0
-    assert elapsed < 10, elapsed
+    # one mode of 4^24 is derived, not the product: seconds on an idle machine, a little more on a loaded one
+    # (10 s failed at a load of 3 on 2 cores); enumerating the modes would never end
+    assert elapsed < 60, elapsed
     assert ms.mode.constrained == [0, 1]
     assert ms.label == "c1=stick,c2=stick (others open)"
     f1, f2 = ms.mode.friction_forces[:2]

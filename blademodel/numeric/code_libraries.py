@@ -26,21 +26,29 @@ one or two.
 The code that runs is compiled from the same IR as before with the same
 floating-point semantics (no fast-math): the kernel computes the same numbers, to
 the bit. This reaches into Numba's code library (``JITCodeLibrary``: its final
-module, module optimization and finalization); if a Numba version lacks what it
-uses, :data:`SUPPORTED` is False and both pipelines are Numba's default.
+module, module optimization and finalization), so it is used only on the Numba
+releases it was checked on (:data:`CHECKED_NUMBA`); elsewhere, or if the code library
+lacks what it uses, :data:`SUPPORTED` is False and both pipelines are Numba's default.
 """
 
 from __future__ import annotations
 
 import llvmlite.binding as ll
+import numba
 from numba.core import codegen as _codegen
 from numba.core.compiler import CompilerBase, DefaultPassBuilder
 from numba.core.compiler_machinery import FunctionPass, register_pass
 from numba.core.typed_passes import NopythonTypeInference
 
-#: Whether this Numba's code library has what the pipelines replace.
-SUPPORTED = (all(hasattr(_codegen.JITCodeLibrary, m) for m in ("_optimize_final_module", "_finalize_final_module",
-                                                                  "enable_object_caching"))
+#: The Numba releases these pipelines were checked on (bit-identical results, the kernel tests): the code
+#: library's internals are private and may change in any release, so another one takes Numba's own pipelines
+#: (the same results, a slower cold compile) until it is checked and added here.
+CHECKED_NUMBA = ("0.68.",)
+
+#: Whether this Numba is a checked release and its code library has what the pipelines replace.
+SUPPORTED = (numba.__version__.startswith(CHECKED_NUMBA)
+             and all(hasattr(_codegen.JITCodeLibrary, m) for m in ("_optimize_final_module", "_finalize_final_module",
+                                                                      "enable_object_caching"))
              and hasattr(_codegen.JITCPUCodegen, "_add_module"))
 
 
