@@ -103,7 +103,10 @@ def test_zero_damping_parameter_reproduces_the_contact_spring():
     np.testing.assert_allclose(zero.final_state, base.final_state, rtol=0, atol=1e-12 * np.abs(base.y).max())
 
 
-@pytest.mark.parametrize("law", [Coulomb(0.3), pytest.param(Jenkins(0.3, 2e5), marks=pytest.mark.slow)],
+# Slow, both: a cold compile of two kernels each (~45 s in CI); the default run checks the damped contact
+# against its closed-form energy loss (test_damped_impact_loses_the_closed_form_energy) on both kernels.
+@pytest.mark.parametrize("law", [pytest.param(Coulomb(0.3), marks=pytest.mark.slow),
+                                 pytest.param(Jenkins(0.3, 2e5), marks=pytest.mark.slow)],
                          ids=["coulomb", "jenkins"])   # jenkins: slow (a cold compile)
 def test_kernels_agree_on_a_damped_friction_contact(law):
     model = pair_like(damping=30.0, law=law)
@@ -156,6 +159,7 @@ def test_constant_load_jenkins_loop_energy():
         assert loop == pytest.approx(4 * mu * N0 * (amp - mu * N0 / kd), rel=1e-6)
 
 
+@pytest.mark.slow   # two cold compiles (~30 s in CI); the default run checks the constant-load contact against Den Hartog
 def test_kernels_agree_on_a_constant_load_friction_contact():
     model = pair_like(normal_load=3.0)
     a, b = (simulate(model, periods=6, steps_per_period=1000, kernel=k) for k in KERNELS)
@@ -236,8 +240,11 @@ contacts:
             load_model(str(path))
 
 
-@pytest.mark.parametrize("case", ["damped coulomb", pytest.param("damped jenkins", marks=pytest.mark.slow),
-                                  "load coulomb"])   # damped jenkins: slow (a cold compile)
+# Slow, each a cold compile of its own tangent (50-110 s in CI); the default run differentiates the pair's
+# impacts and stick/slip in tests/test_tangent.py.
+@pytest.mark.parametrize("case", [pytest.param("damped coulomb", marks=pytest.mark.slow),
+                                  pytest.param("damped jenkins", marks=pytest.mark.slow),
+                                  pytest.param("load coulomb", marks=pytest.mark.slow)])
 def test_tangent_monodromy_equals_differences(case):
     """The product-mode kernel's tangent differentiates through the new guards (a damped contact's
     opening at ``N = 0``, its Piecewise closing guard, Jenkins' ``Ndot`` with accelerations)."""

@@ -232,6 +232,7 @@ def _sweep(cfg, values, periods=300):
     return np.array(events)
 
 
+@pytest.mark.slow   # ~60 s in CI; the default run checks folds against warm sweeps on the bilinear pair (below)
 def test_the_folds_of_a_hardening_contact_resonance_bound_the_hysteresis_of_sweeps():
     """Frictionless pair, F0 = 0.5 N: the contact stiffens the tangential resonance, whose branch bends over.
     Continuation finds its two folds. A warm-started sweep up (1 rad/s apart, 300 periods a value) leaves the

@@ -418,6 +418,7 @@ def test_bilinear_row_friction_force_never_exceeds_mu_n(gap):
         assert np.all(c["f"][~closed, j] == 0)
 
 
+@pytest.mark.slow   # a cold compile of a 3-element Iwan row (~50 s in CI); Coulomb rows run by default
 def test_iwan_row_friction_force_never_exceeds_mu_n():
     """Found by this test: an element that stuck a rounding error past its slip force started the
     shared stick->slip guard below zero, so other elements passed their limits unseen (1.03 mu N,

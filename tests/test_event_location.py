@@ -12,7 +12,7 @@ from blademodel.numeric.contact_locate import MAX_LOCATE_TRIALS
 from blademodel.numeric.integrator import EVENT_TOL_FLOOR
 
 
-@pytest.mark.parametrize("law", ["coulomb", "bilinear"])
+@pytest.mark.parametrize("law", ["coulomb", pytest.param("bilinear", marks=pytest.mark.slow)])  # bilinear: ~40 s
 def test_pair_events_are_the_bisection_roots(law):
     """Predicted roots (per-contact kernel; product kernel on request) equal the bisection's to the tolerance.
 

@@ -105,6 +105,7 @@ def cli(args, pythonpath) -> dict:
 RUN = ["--transient", "20", "--periods", "20", "--json"]
 
 
+@pytest.mark.slow   # ~35 s in CI; test_entry_point_law_through_the_cli takes an external law through the CLI
 def test_law_from_this_file_through_yaml_and_the_cli(tmp_path):
     """``law: test_external_law:FileJenkins`` in a components YAML, simulated by the CLI in a
     fresh process, gives exactly the built-in bilinear law's motion."""
@@ -262,6 +263,7 @@ def test_docs_law_with_equal_coefficients_is_coulomb(static_kinetic):
         static_kinetic(mu_s=0.5, mu_k=0.6)
 
 
+@pytest.mark.slow   # a cold compile (~20 s in CI); the docs law's Coulomb limit runs by default
 def test_docs_law_breaks_away_at_the_static_limit(static_kinetic):
     # A mass on a spring, pressed on the ground with the constant load N and driven
     # harmonically: while it sticks, f = P sin(w t) - k x; it breaks away when |f| = mu_s N.

@@ -258,6 +258,7 @@ def test_hybrid_integrator_advance_refuses_bad_arguments():
     assert status == 0 and t == pytest.approx(2 * integ.period)
 
 
+@pytest.mark.slow   # a cold compile of a ring kernel (~50 s in CI); the product kernel's checks run by default
 def test_contact_integrator_advance_refuses_bad_arguments():
     import numpy as np
     from blademodel.numeric import ContactIntegrator

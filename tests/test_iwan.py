@@ -77,7 +77,7 @@ def test_stability_limit_is_set_by_the_stick_branch():
     assert limits[0] == limits[1]
 
 
-@pytest.mark.parametrize("n", [1, 3, 7])
+@pytest.mark.parametrize("n", [1, 3, pytest.param(7, marks=pytest.mark.slow)])   # 7 elements: ~55 s in CI
 @pytest.mark.parametrize("ratio", [0.5, 1.2])
 def test_energy_per_cycle_matches_the_closed_form(n, ratio):
     a = ratio * D0
@@ -135,6 +135,7 @@ def test_continuous_limit_formula():
                         rel_tol=1e-6)
 
 
+@pytest.mark.slow   # ~35 s in CI; tests/test_solver_exact.py balances the pair's energy with Coulomb friction
 def test_energy_balance_paper_model():
     model = BladePair(friction="iwan", friction_options={"elements": 3}).build()
     r = simulate(model, periods=50, steps_per_period=2000, energy=True)

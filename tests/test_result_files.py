@@ -75,6 +75,7 @@ def test_the_study_and_the_config_round_trip(result):
     assert opened.attrs["config"] == json.loads(ds.attrs["config"])
 
 
+@pytest.mark.slow   # a cold compile of its own tangent (~45 s in CI); test_continuation.py round-trips branch files
 def test_a_branch_file_is_cf_and_plot_draws_it(tmp_path, capsys):
     """``continue --out`` writes a CF file with named coordinates; ``blademodel plot`` draws its forced response."""
     from matplotlib.image import imread

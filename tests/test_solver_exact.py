@@ -102,7 +102,8 @@ def test_jenkins_energy_per_cycle_under_imposed_motion():
     assert_allclose(per_cycle, exact, rtol=1e-8)
 
 
-@pytest.mark.parametrize("friction", ["coulomb", "bilinear", "none"])
+@pytest.mark.parametrize("friction", ["coulomb", pytest.param("bilinear", marks=pytest.mark.slow),
+                                      pytest.param("none", marks=pytest.mark.slow)])   # 30-45 s each in CI
 def test_energy_balance_paper_model(friction):
     model = BladePair(friction=friction).build()
     r = simulate(model, periods=50, steps_per_period=2000, energy=True)

@@ -264,6 +264,7 @@ class CubicDrag(FrictionLaw):
         return [Candidate("drag")]
 
 
+@pytest.mark.slow   # a cold compile of its own law and tangent (~50 s in CI)
 def test_a_flow_not_affine_in_the_state_is_differentiated_step_by_step():
     """A mass on a spring against a cubic drag (``m x'' + k x + c3 x'^3 = F sin wt``): its mode is not affine, so
     the replay differentiates every step with the Jacobian at the stages; monodromy and a parameter derivative
