@@ -51,7 +51,13 @@ def start(*args, cwd=None, tag: str, **kw) -> subprocess.Popen:
     """Start ``blademodel *args`` in its own session (so a Ctrl-C can go to its process group)."""
     return subprocess.Popen([sys.executable, "-m", "blademodel", *map(str, args)], cwd=cwd, env=cli_env(tag),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
-                            **kw)
+                            preexec_fn=_default_sigint, **kw)
+
+
+def _default_sigint():
+    # As from a terminal: a shell starts background jobs (``pytest ... &``, ``nohup``) with SIGINT
+    # ignored, children inherit that, and Python then installs no KeyboardInterrupt handler.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def tagged(tag: str) -> list[int]:

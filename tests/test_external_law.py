@@ -251,6 +251,7 @@ def static_kinetic(monkeypatch):
     return StaticKineticCoulomb
 
 
+@pytest.mark.slow   # a cold compile (~50 s in CI); test_entry_point_law_through_the_cli runs an external law
 def test_docs_law_with_equal_coefficients_is_coulomb(static_kinetic):
     law = "static_kinetic:StaticKineticCoulomb"
     cfg = BladePair(friction=law, friction_options={"mu_s": 0.5, "mu_k": 0.5})

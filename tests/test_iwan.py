@@ -77,7 +77,7 @@ def test_stability_limit_is_set_by_the_stick_branch():
     assert limits[0] == limits[1]
 
 
-@pytest.mark.parametrize("n", [1, 3, pytest.param(7, marks=pytest.mark.slow)])   # 7 elements: ~55 s in CI
+@pytest.mark.parametrize("n", [1, pytest.param(3, marks=pytest.mark.slow), pytest.param(7, marks=pytest.mark.slow)])   # 3, 7: 30-55 s in CI
 @pytest.mark.parametrize("ratio", [0.5, 1.2])
 def test_energy_per_cycle_matches_the_closed_form(n, ratio):
     a = ratio * D0
@@ -92,6 +92,7 @@ def test_energy_per_cycle_matches_the_closed_form(n, ratio):
         assert exact == (4 * MU * N * (a - D0) if a > D0 else 0.0)
 
 
+@pytest.mark.slow   # a cold compile (~30 s in CI); one element's equality with the bilinear law runs by default
 def test_elements_that_switch_together():
     # Two elements with the same slip displacement (and a third, stiffer one) switch in
     # the same instants, when the contact closes and at every reversal (constant N):

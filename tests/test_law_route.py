@@ -83,13 +83,14 @@ def friction_values(model: Model) -> dict[str, float]:
 
 
 @pytest.mark.parametrize("first, second, laws, values", [
-    ("{law: iwan, mu: 0.5, elements: 2}", "{law: iwan, mu: 0.3, elements: 2}",
-     lambda n: Iwan(mu=Param(f"mu_{n}", 0.5 if n == "c12" else 0.3), kd=Param(f"kd_{n}", 1e6), elements=2),
-     {"mu_c12": 0.5, "kd_c12": 1e6, "mu_c23": 0.3, "kd_c23": 1e6}),
+    pytest.param("{law: iwan, mu: 0.5, elements: 2}", "{law: iwan, mu: 0.3, elements: 2}",
+                 lambda n: Iwan(mu=Param(f"mu_{n}", 0.5 if n == "c12" else 0.3), kd=Param(f"kd_{n}", 1e6),
+                                elements=2),
+                 {"mu_c12": 0.5, "kd_c12": 1e6, "mu_c23": 0.3, "kd_c23": 1e6}, marks=pytest.mark.slow),
     pytest.param(f'{{law: "{LAW}", mu: 0.5, v0: 0.05}}', f'{{law: "{LAW}", mu: 0.3}}',
                  lambda n: Regularised(mu=Param(f"mu_{n}", 0.5 if n == "c12" else 0.3), v0=Param(f"v0_{n}", 0.05)),
                  {"mu_c12": 0.5, "v0_c12": 0.05, "mu_c23": 0.3, "v0_c23": 0.05}, marks=pytest.mark.slow),
-], ids=["iwan", "external"])   # external: slow (a cold compile; tests/test_external_law.py runs external laws)
+], ids=["iwan", "external"])   # both slow: a cold compile each (~40 s in CI); the other tests here route laws
 def test_two_contacts_with_their_own_values_are_the_python_model(tmp_path, first, second, laws, values):
     """Plain numbers (and defaults) of each contact's law get that contact's symbols, as a Python model
     would name them; the YAML model is then the Python model, to the last bit of its motion."""

@@ -102,8 +102,10 @@ def test_jenkins_energy_per_cycle_under_imposed_motion():
     assert_allclose(per_cycle, exact, rtol=1e-8)
 
 
-@pytest.mark.parametrize("friction", ["coulomb", pytest.param("bilinear", marks=pytest.mark.slow),
-                                      pytest.param("none", marks=pytest.mark.slow)])   # 30-45 s each in CI
+# Slow: a cold compile of the pair's energy kernel each (30-65 s in CI); the default run balances the energy
+# of rings with both laws (tests/test_bladed_disk.py) and of a Coulomb contact under gravity (test_forces.py).
+@pytest.mark.slow
+@pytest.mark.parametrize("friction", ["coulomb", "bilinear", "none"])
 def test_energy_balance_paper_model(friction):
     model = BladePair(friction=friction).build()
     r = simulate(model, periods=50, steps_per_period=2000, energy=True)
