@@ -186,7 +186,7 @@ def test_a_released_oscillator_settles_at_the_shifted_equilibrium(kernel, contac
     assert_allclose([r.final["x1"], r.final["x2"]], np.linalg.solve(K, [-1.2 * g, 2.5]), rtol=1e-9)
 
 
-@pytest.mark.parametrize("kernel, contacts", KERNELS_LEAN, ids=[k for k, _ in KERNELS])
+@pytest.mark.parametrize("kernel, contacts", KERNELS_PRODUCT, ids=[k for k, _ in KERNELS])
 def test_phased_harmonic_and_constant_forces_add_up_exactly(kernel, contacts):
     """``F0 sin(omega t + phi)`` with any phase plus a preload: the exact transient from rest."""
     w = 21.0
@@ -221,7 +221,7 @@ def test_several_harmonics_keep_the_base_period_of_the_poincare_section():
 
 # --- a constant force against a contact ---------------------------------------------------------------------
 
-@pytest.mark.parametrize("kernel", ["product", "contact"])
+@pytest.mark.parametrize("kernel", ["product", pytest.param("contact", marks=pytest.mark.slow)])   # contact: ~30 s
 def test_a_preload_presses_a_mass_into_its_contact(kernel):
     """``k x = F - kc (x - gap)`` while closed: the mass rests at ``(F + kc gap) / (k + kc)``."""
     k, kc, gap, F = 1e3, 4e3, 1e-3, 10.0

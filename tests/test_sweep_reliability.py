@@ -271,6 +271,25 @@ def test_ctrl_c_during_a_sweep_says_how_to_resume(tmp_path, reference):
         kill_all(tag)
 
 
+def test_a_ctrl_c_just_after_a_point_is_written_counts_it(tmp_path, monkeypatch):
+    """The message counts what the file holds: a Ctrl-C between writing a point and counting it."""
+    from blademodel.sweep import runner
+    from blademodel.sweep.errors import SweepInterrupted
+    real, calls = runner.storage.write_point, []
+
+    def write_then_interrupt(path, index, out):
+        real(path, index, out)
+        calls.append(index)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(runner.storage, "write_point", write_then_interrupt)
+    out = tmp_path / "tiny.nc"
+    with pytest.raises(SweepInterrupted, match=r"interrupted: 2 of 4 points are saved"):
+        run_study(Study.model_validate(TINY), out, workers=1, progress=None, log=None)
+    assert done_count(out) == 2
+
+
 @linux_only
 def test_ctrl_c_during_a_run_is_one_line(tmp_path):
     tag = "ctrl-c-run-" + str(os.getpid())

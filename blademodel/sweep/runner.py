@@ -192,6 +192,10 @@ def run_study(study: Study, out: str | Path, *, workers: int | None = None, sche
             interrupt = getattr(progress, "interrupt", None)
             if interrupt is not None:
                 interrupt()   # end a half-drawn progress bar's line
+            try:   # the file is the truth: the Ctrl-C can land after a point is written, before it is counted
+                done = total - len(storage.pending(out, study_json))
+            except Exception:   # unreadable now: this run's own count
+                pass
             raise SweepInterrupted(f"interrupted: {done} of {total} points are saved in {out}; run the same "
                                    f"command again to resume") from None
     return out
