@@ -92,32 +92,33 @@ def _use_library(state, cls):
             state.library.enable_object_caching()
 
 
+class _UseLibrary(FunctionPass):
+    """Give the function a code library of class ``library`` (before lowering creates the default one)."""
+
+    library = None
+
+    def __init__(self):
+        FunctionPass.__init__(self)
+
+    def run_pass(self, state):
+        _use_library(state, self.library)
+        return False
+
+
 @register_pass(mutates_CFG=False, analysis_only=False)
-class UseLinkedOnlyLibrary(FunctionPass):
-    """Give the function a :class:`LinkedOnlyLibrary` (before lowering creates the default one)."""
+class UseLinkedOnlyLibrary(_UseLibrary):
+    """Give the function a :class:`LinkedOnlyLibrary`."""
 
     _name = "blademodel_use_linked_only_library"
-
-    def __init__(self):
-        FunctionPass.__init__(self)
-
-    def run_pass(self, state):
-        _use_library(state, LinkedOnlyLibrary)
-        return False
+    library = LinkedOnlyLibrary
 
 
 @register_pass(mutates_CFG=False, analysis_only=False)
-class UseEntryPointLibrary(FunctionPass):
-    """Give the function an :class:`EntryPointLibrary` (before lowering creates the default one)."""
+class UseEntryPointLibrary(_UseLibrary):
+    """Give the function an :class:`EntryPointLibrary`."""
 
     _name = "blademodel_use_entry_point_library"
-
-    def __init__(self):
-        FunctionPass.__init__(self)
-
-    def run_pass(self, state):
-        _use_library(state, EntryPointLibrary)
-        return False
+    library = EntryPointLibrary
 
 
 class LinkedOnlyCompiler(CompilerBase):
