@@ -54,8 +54,9 @@ GOAL = 20.0
 
 
 def by_continuation(cfg, points, jacobian="auto"):
+    # one thread: the clock is the thread's CPU time, and the sweeps run in one thread too
     return continuation(cfg, "omega", START, STOP, ds=0.5 / points, ds_max=1.0 / points, tol=TOL,
-                        max_points=20 * points, jacobian=jacobian)
+                        max_points=20 * points, jacobian=jacobian, workers=1)
 
 
 class _Integrators:

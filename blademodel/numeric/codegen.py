@@ -286,7 +286,8 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
                "predicted_root", "earliest_predicted", "copy_guards",
                "locate_event", "simultaneous_crossing", "initial_mode",
                "integrate"):
-        L.append(f"{fn} = njit(cache=True)({fn})")
+        # integrate releases the GIL: difference quotients of a period map run in threads
+        L.append(f"{fn} = njit(cache=True{', nogil=True' if fn == 'integrate' else ''})({fn})")
 
     header = ["import math", "import numpy as np", "from numba import njit", ""]
     meta = {

@@ -30,6 +30,11 @@ TEMPLATES = (bracket, contact_flow, contact_stick, contact_guards, contact_locat
 #: separate library that callers cannot inline, and each call to one cost ~0.4 us.
 _ENTRY_POINTS = ("integrate", "initial_modes", "rhs", "factor_stick", "forces", "law_energy")
 
+#: Entry points that release the GIL while they run: a period map's difference quotients run
+#: in threads (:meth:`~blademodel.orbits.period_map.PeriodMap.differences`), each with its own
+#: work arrays (:meth:`~blademodel.numeric.contact_kernel.ContactIntegrator.worker`).
+_NOGIL = ("integrate",)
+
 #: Entry points never called from compiled code: what they link becomes internal to them
 #: (:class:`~blademodel.numeric.code_libraries.EntryPointCompiler`).
 _TOP_LEVEL = ("integrate", "initial_modes", "rhs", "forces", "law_energy")
@@ -138,7 +143,8 @@ def generate_contact_kernel(laws: list[FrictionLaw]) -> tuple[str, dict]:
         cache = ("cache=True, " + ("pipeline_class=EntryPointCompiler, " if fn in _TOP_LEVEL else "")
                  if fn in _ENTRY_POINTS else
                  "no_cpython_wrapper=True, no_cfunc_wrapper=True, pipeline_class=LinkedOnlyCompiler, ")
-        L.append(f"{fn} = njit({cache}_nrt=False{inline})({fn})")
+        nogil = "nogil=True, " if fn in _NOGIL else ""
+        L.append(f"{fn} = njit({cache}{nogil}_nrt=False{inline})({fn})")
     meta = {"kinds": [{"modes": c.modes, "guards": c.guard_names, "states": c.state_names,
                        "params": c.param_fields, "rigid": list(c.rigid) if c.rigid else None} for c in codes],
             "gmax": gmax}

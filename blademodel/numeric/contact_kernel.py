@@ -294,6 +294,10 @@ class ContactIntegrator(Integrator):
                 raise RuntimeError("the friction problem of the initial state was not resolved")
         return cm
 
+    def _own_work_arrays(self) -> None:
+        self.WI, self.WF, self.SC, self.GS = self.WI.copy(), self.WF.copy(), self.SC.copy(), self.GS.copy()
+        self._clear_near_marks()
+
     def _clear_near_marks(self):
         """Forget the contacts marked as fired before their own root (``WC_NEAR``) and the times of the last
         transitions (``F_TLAST``): a run's hybrid state."""

@@ -194,6 +194,21 @@ class Integrator:
     def state_names(self) -> list[str]:
         return list(self.meta["state"])
 
+    def worker(self) -> "Integrator":
+        """This integrator with work arrays of its own, to run in another thread.
+
+        The copy shares the compiled kernel, the model and the parameter tables (which
+        a run only reads) and owns every array a run writes to, so the two may
+        integrate at the same time: the kernels release the GIL while they integrate.
+        Each copy gives the same results as this integrator, to the bit.
+        """
+        new = copy.copy(self)
+        new._own_work_arrays()
+        return new
+
+    def _own_work_arrays(self) -> None:
+        raise NotImplementedError
+
     def initial_state(self, y0=None) -> np.ndarray:
         """State vector from ``y0`` (array or ``{name: value}``); default rest."""
         return state_vector(self.meta["state"], self.n_state, y0)
@@ -265,6 +280,10 @@ class HybridIntegrator(Integrator):
                                            self.n_physical, self.method.amplification)
             check_step(self.period, self.steps_per_period, h_max,
                        self.meta["modes"][which] if which >= 0 else "-", self.method.name)
+
+    def _own_work_arrays(self) -> None:
+        self._g = np.empty_like(self._g)
+        self._ytmp = np.empty_like(self._ytmp)
 
     def with_parameters(self, model: Model) -> "HybridIntegrator":
         """This integrator for ``model``, which differs from its own in parameter values only.

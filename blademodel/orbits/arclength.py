@@ -39,7 +39,7 @@ from typing import Callable
 import numpy as np
 
 from .field_path import AffineFieldPath
-from .period_map import FlowError, PeriodMap, _copy, _key
+from .period_map import FlowError, PeriodMap, _copy, _key, worker_count
 from .shooting import _n_coordinates, _orbit_samples, _same, _state_scale, find_periodic_orbit
 
 
@@ -131,9 +131,10 @@ class _Family:
     """
 
     def __init__(self, config, name: str, periods: int, settings: dict, start: float, jacobian: str = "auto",
-                 bounds: tuple | None = None):
+                 bounds: tuple | None = None, workers: int | None = None):
         self.config, self.name, self.periods, self.settings = config, name, periods, settings
         self.jacobian = jacobian
+        self.workers = worker_count(workers)
         try:
             self.config_at(start)
         except ValueError as e:
@@ -201,7 +202,7 @@ class _Family:
         if key not in self._cache:
             if len(self._cache) > 8:
                 self._cache.pop(next(iter(self._cache)))
-            self._cache[key] = PeriodMap(self._integrator_at(key), self.periods, self.jacobian)
+            self._cache[key] = PeriodMap(self._integrator_at(key), self.periods, self.jacobian, self.workers)
         return self._cache[key]
 
     def _integrator_at(self, value: float):
@@ -227,7 +228,7 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
                  transient: int = 20, ds: float = 0.01, ds_min: float = 1e-5, ds_max: float = 0.05,
                  max_points: int = 400, tol: float = 1e-10, max_corrections: int = 8, rel_step: float = 1e-6,
                  locate_tol: float = 1e-7, steps_per_period: int = 1000, event_tol: float = 1e-10,
-                 method: str = "rk4", kernel: str = "auto", jacobian: str = "auto",
+                 method: str = "rk4", kernel: str = "auto", jacobian: str = "auto", workers: int | None = None,
                  progress: Callable[[int, float], None] | None = None) -> Branch:
     """Follow the periodic orbits of ``config`` as its field ``name`` goes from ``start`` toward ``stop``.
 
@@ -260,6 +261,10 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         The integrator's settings.
     jacobian : {"auto", "tangent", "differences"}
         How the period map is differentiated (:class:`~blademodel.orbits.period_map.PeriodMap`).
+    workers : int, optional
+        Threads for the difference quotients where the map is differentiated by
+        differences (rings): ``None`` or ``-1`` every CPU, ``1`` none. The branch is the
+        same to the bit whatever the number.
     progress : callable, optional
         ``progress(point, value)`` after each point.
 
@@ -268,14 +273,14 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
     Branch
     """
     settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
-    fam = _Family(config, name, periods, settings, start, jacobian, bounds=(start, stop))
+    fam = _Family(config, name, periods, settings, start, jacobian, bounds=(start, stop), workers=workers)
     span = abs(stop - start)
     if not span > 0:
         raise ValueError(f"start and stop must differ, got {start!r} and {stop!r}")
     direction = 1.0 if stop > start else -1.0
     P0 = fam.map_at(start)
     first = find_periodic_orbit(None, periods=periods, guess=guess, mode=mode, transient=transient, tol=tol,
-                                rel_step=rel_step, integrator=P0.integrator, jacobian=jacobian)
+                                rel_step=rel_step, integrator=P0.integrator, jacobian=jacobian, workers=workers)
     scale = first.scale
     n = scale.size
     ctx = _Context(fam, scale, span, tol, rel_step, max_corrections)
@@ -294,7 +299,8 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
                           max_points: int = 400, tol: float = 1e-10, max_corrections: int = 8,
                           rel_step: float = 1e-6, locate_tol: float = 1e-7, steps_per_period: int = 1000,
                           event_tol: float = 1e-10, method: str = "rk4", kernel: str = "auto",
-                          jacobian: str = "auto", progress: Callable[[int, float], None] | None = None) -> Branch:
+                          jacobian: str = "auto", workers: int | None = None,
+                          progress: Callable[[int, float], None] | None = None) -> Branch:
     """The branch of period-``2 periods`` orbits born at a period doubling of a period-``periods`` branch.
 
     At a period doubling the map over ``periods`` excitation periods has the multiplier
@@ -320,7 +326,7 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
         Period of the *old* branch; the new one has twice it.
     ds, ds_min, ds_max, max_points, tol, max_corrections, rel_step, locate_tol : float
         As for :func:`continuation`; ``ds`` is also the switch's step along ``v``.
-    steps_per_period, event_tol, method, kernel, jacobian, progress
+    steps_per_period, event_tol, method, kernel, jacobian, workers, progress
         As for :func:`continuation`.
 
     Returns
@@ -341,7 +347,7 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
     if not lo <= point.param <= hi:
         raise ValueError(f"the period doubling at {name} = {point.param:g} lies outside [{lo:g}, {hi:g}]")
     settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
-    fam = _Family(config, name, 2 * periods, settings, point.param, jacobian, bounds=(start, stop))
+    fam = _Family(config, name, 2 * periods, settings, point.param, jacobian, bounds=(start, stop), workers=workers)
     span = hi - lo
     P2 = fam.map_at(point.param)
     ig = P2.integrator
@@ -352,7 +358,7 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
         full[:y.size] = y
         mode = ig.mode_of(full)
     scale = _state_scale(_orbit_samples(ig, y, mode, 2 * periods)[1], _n_coordinates(ig))
-    old = PeriodMap(ig, periods, jacobian)   # the period-``periods`` map
+    old = PeriodMap(ig, periods, jacobian, workers)   # the period-``periods`` map
     J1 = old.jacobian(y, _copy(mode), scale, rel_step)
     mu, V = np.linalg.eig(J1)
     k = int(np.argmin(np.abs(mu + 1.0)))

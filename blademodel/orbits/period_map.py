@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,13 +81,19 @@ class PeriodMap:
         events) exists for the product-mode kernel; ``"auto"`` takes it there and falls
         back to central differences elsewhere, or where the tangent fails (an event
         with a zero guard rate).
+    workers : int, optional
+        Threads that integrate the difference quotients of :meth:`differences` (each
+        with its own copy of the integrator's work arrays; the kernels release the GIL):
+        ``None`` or ``-1`` for every CPU this process may use, ``1`` for none. The
+        Jacobian is the same to the bit whatever the number.
     """
 
-    def __init__(self, integrator, periods: int = 1, jacobian: str = "auto"):
+    def __init__(self, integrator, periods: int = 1, jacobian: str = "auto", workers: int | None = None):
         if int(periods) < 1:
             raise ValueError(f"periods must be a whole number >= 1, got {periods!r}")
         if jacobian not in JACOBIAN_METHODS:
             raise ValueError(f"jacobian = {jacobian!r} must be one of {', '.join(JACOBIAN_METHODS)}")
+        self.workers = worker_count(workers)
         product = getattr(integrator, "kernel", "") == "product"
         if jacobian == "tangent" and not product:
             raise ValueError("jacobian = 'tangent' needs the product-mode kernel (models with at most one contact)")
@@ -222,27 +229,69 @@ class PeriodMap:
 
     def plain(self, y, mode):
         """``P(y)`` alone: no record, no log, nothing kept (the runs of difference quotients)."""
-        ig = self.integrator
-        full = np.zeros(ig.n_state)
-        full[:self.n] = y
-        mode = settle(ig, full, _copy(mode))
-        status, _, t = ig.advance(full, mode, 0, self.periods, check=False)
+        Py = _plain_map(self.integrator, self.periods, y, mode)
         self.evaluations += 1
-        if status != 0:
-            raise FlowError(f"the integration stopped at t = {t:.6g} s with status {status}")
-        return full[:self.n].copy()
+        return Py
 
     def differences(self, y, mode, scale, rel_step: float = 1e-6) -> np.ndarray:
-        """``dP/dy`` by central differences, column ``i`` with step ``rel_step * scale[i]`` (see :meth:`jacobian`)."""
+        """``dP/dy`` by central differences, column ``i`` with step ``rel_step * scale[i]`` (see :meth:`jacobian`).
+
+        The columns are shared among ``workers`` threads, each integrating with its own
+        copy of the integrator (:meth:`~blademodel.numeric.integrator.Integrator.worker`).
+        """
         y = np.asarray(y, dtype=float)
         J = np.empty((self.n, self.n))
-        for i in range(self.n):
-            d = rel_step * scale[i]
-            yp, ym = y.copy(), y.copy()
-            yp[i] += d
-            ym[i] -= d
-            J[:, i] = (self.plain(yp, mode) - self.plain(ym, mode)) / (2.0 * d)
+
+        def columns(ig, cols):
+            for i in cols:
+                d = rel_step * scale[i]
+                yp, ym = y.copy(), y.copy()
+                yp[i] += d
+                ym[i] -= d
+                J[:, i] = (_plain_map(ig, self.periods, yp, mode) - _plain_map(ig, self.periods, ym, mode)) / (2.0 * d)
+
+        w = min(self.workers, self.n)
+        if w <= 1:
+            columns(self.integrator, range(self.n))
+        else:
+            from concurrent.futures import ThreadPoolExecutor
+            with ThreadPoolExecutor(max_workers=w) as pool:
+                # round robin: columns of neighbouring states cost alike, so each thread gets its share
+                done = pool.map(columns, [self.integrator.worker() for _ in range(w)],
+                                [range(k, self.n, w) for k in range(w)])
+                list(done)   # re-raises a worker's FlowError here
+        self.evaluations += 2 * self.n
         return J
+
+
+def worker_count(workers: int | None) -> int:
+    """The threads ``workers`` asks for: ``None`` or ``-1`` is every CPU this process may use.
+
+    Raises
+    ------
+    ValueError
+        For anything but ``None``, ``-1`` or a whole number ``>= 1``.
+    """
+    if workers is None or (isinstance(workers, (int, np.integer)) and int(workers) == -1):
+        try:
+            return max(len(os.sched_getaffinity(0)), 1)
+        except AttributeError:   # not on Linux
+            return max(os.cpu_count() or 1, 1)
+    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or int(workers) < 1:
+        raise ValueError(f"workers = {workers!r} must be a whole number >= 1, or -1 (or None) for every CPU")
+    return int(workers)
+
+
+def _plain_map(ig, periods: int, y, mode) -> np.ndarray:
+    """``periods`` periods of ``ig`` from ``(y, mode)`` at ``t = 0``, nothing recorded: the end state's physical part."""
+    n = ig.n_physical
+    full = np.zeros(ig.n_state)
+    full[:n] = y
+    mode = settle(ig, full, _copy(mode))
+    status, _, t = ig.advance(full, mode, 0, periods, check=False)
+    if status != 0:
+        raise FlowError(f"the integration stopped at t = {t:.6g} s with status {status}")
+    return full[:n].copy()
 
 
 def settle(integrator, y, mode, fired: list | None = None):

@@ -105,7 +105,8 @@ def _state_scale(y_hist: np.ndarray, n_q: int) -> np.ndarray:
 def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, transient: int = 20,
                         tol: float = 1e-10, max_iter: int = 30, rel_step: float = 1e-6,
                         steps_per_period: int = 1000, event_tol: float = 1e-10, method: str = "rk4",
-                        kernel: str = "auto", integrator=None, jacobian: str = "auto") -> PeriodicOrbit:
+                        kernel: str = "auto", integrator=None, jacobian: str = "auto",
+                        workers: int | None = None) -> PeriodicOrbit:
     """A periodic orbit of ``periods`` excitation periods by shooting on the exact hybrid flow.
 
     Newton's method on ``r(y) = P(y) - y``, ``P`` the map over ``periods * T``
@@ -143,6 +144,9 @@ def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, trans
         How ``dP/dy`` is formed (:class:`~blademodel.orbits.period_map.PeriodMap`): the
         tangent of the flow (variational equations, saltation matrices) on the
         product-mode kernel, central differences elsewhere.
+    workers : int, optional
+        Threads for the difference quotients (:class:`~blademodel.orbits.period_map.PeriodMap`):
+        ``None`` or ``-1`` every CPU, ``1`` none; the orbit is the same to the bit.
 
     Returns
     -------
@@ -161,7 +165,7 @@ def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, trans
         integrator = make_integrator(model, kernel=kernel, steps_per_period=steps_per_period,
                                      event_tol=event_tol, method=method)
     ig = integrator
-    P = PeriodMap(ig, periods, jacobian)
+    P = PeriodMap(ig, periods, jacobian, workers)
     n = P.n
     y_full = ig.initial_state(guess)
     if mode is None:

@@ -1,0 +1,126 @@
+"""A bladed disk's period-map Jacobian by differences in threads against one thread.
+
+    python benchmarks/ring_jacobian.py [--blades 8 24 48] [--repeats 3] [--points 6]
+
+The per-contact kernel has no tangent, so a ring's Jacobian is ``2 n`` integrations of a
+period (:meth:`blademodel.orbits.PeriodMap.differences`), shared among ``workers``
+threads, each with its own copy of the integrator's work arrays (the kernel releases the
+GIL while it integrates). For tuned Coulomb rings of ``models/bladed_disk_24.yaml``
+(engine order 3, ``S = 600`` as on the docs' FRF, a state after 50 periods), the
+Jacobian with one thread and with every CPU, repeats interleaved, minimum taken:
+
+* *speed-up*: wall time with one thread / with every CPU (the time a user waits);
+* *CPU overhead*: the process's CPU time (every thread) with every CPU / with one thread
+  (what the threads cost on top, in contention and in copying work arrays).
+
+Then a short continuation of the 24-blade ring in omega (``--points`` points from 280
+rad/s), one thread against every CPU, interleaved: its wall time per point. Every
+threaded Jacobian and branch is checked to equal the one-thread one to the bit.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parent))
+import _common as C  # noqa: E402
+
+from blademodel.config import apply_overrides, load_config  # noqa: E402
+from blademodel.numeric.kernels import make_integrator  # noqa: E402
+from blademodel.orbits import PeriodMap, continuation  # noqa: E402
+from blademodel.orbits.period_map import worker_count  # noqa: E402
+
+STEPS = 600
+
+
+def ring(blades: int):
+    return apply_overrides(load_config(C.ROOT / "models" / "bladed_disk_24.yaml"), {"blades": str(blades)})
+
+
+def clocks(f):
+    """``(result, wall s, process CPU s)`` of ``f()``."""
+    w, c = time.perf_counter(), time.process_time()
+    out = f()
+    return out, time.perf_counter() - w, time.process_time() - c
+
+
+def jacobian_rows(blades_list, repeats, workers):
+    rows = []
+    for blades in blades_list:
+        ig = make_integrator(ring(blades).build(), steps_per_period=STEPS)
+        y = ig.initial_state()
+        status, mode, _ = ig.advance(y, ig.mode_of(y), 0, 50)
+        assert status == 0
+        y = y[:ig.n_physical].copy()
+        scale = np.maximum(np.abs(y), 1e-3 * np.abs(y).max())
+        runs = {1: [], workers: []}
+        ref = None
+        for _ in range(repeats):
+            for w in runs:
+                J, wall, cpu = clocks(lambda: PeriodMap(ig, workers=w).differences(y, mode, scale))
+                ref = J if ref is None else ref
+                if not np.array_equal(J, ref):
+                    raise AssertionError(f"{blades} blades: the Jacobian with {w} threads differs from one thread's")
+                runs[w].append((wall, cpu))
+        one, many = (min(runs[w]) for w in (1, workers))
+        cpu1, cpuw = min(c for _, c in runs[1]), min(c for _, c in runs[workers])
+        rows.append({"blades": blades, "states": y.size, "integrations": 2 * y.size, "wall_1": one[0],
+                     "wall_w": many[0], "speedup": one[0] / many[0], "cpu_1": cpu1, "cpu_w": cpuw,
+                     "cpu_overhead": cpuw / cpu1})
+        print(f"  {blades} blades: {rows[-1]['speedup']:.2f} x faster, CPU x {rows[-1]['cpu_overhead']:.2f}", flush=True)
+    return rows
+
+
+def branch_row(points, repeats, workers):
+    cfg = ring(24)
+    times = {1: [], workers: []}
+    ref = None
+    for _ in range(repeats):
+        for w in times:
+            b, wall, cpu = clocks(lambda: continuation(cfg, "omega", 280.0, 292.0, max_points=points,
+                                                       steps_per_period=STEPS, transient=50, workers=w))
+            ref = b if ref is None else ref
+            if not (np.array_equal(b.states, ref.states) and np.array_equal(b.multipliers, ref.multipliers)):
+                raise AssertionError(f"the branch with {w} threads differs from one thread's")
+            times[w].append((wall / len(b.params), cpu / len(b.params)))
+    one, many = min(times[1]), min(times[workers])
+    return {"blades": 24, "points": len(ref.params), "wall_point_1": one[0], "wall_point_w": many[0],
+            "speedup": one[0] / many[0], "cpu_point_1": one[1], "cpu_point_w": many[1]}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--blades", type=int, nargs="+", default=[8, 24, 48])
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--points", type=int, default=6, help="points of the 24-blade branch (0: none)")
+    args = ap.parse_args()
+    workers = worker_count(None)
+    if workers < 2:
+        print("one CPU only: nothing to compare")
+        return 1
+    C.print_load("at start")
+    t0 = time.time()
+    make_integrator(ring(4).build(), steps_per_period=STEPS)   # compile (or load) the kernel before timing
+    rows = jacobian_rows(args.blades, args.repeats, workers)
+    print(C.table(rows, [("blades", "blades", "d"), ("states", "states", "d"), ("integrations", "integrations", "d"),
+                         ("wall_1", "1 thread s", ".2f"), ("wall_w", f"{workers} threads s", ".2f"),
+                         ("speedup", "speed-up", ".2f"), ("cpu_overhead", "CPU overhead", ".2f")]))
+    branch = None
+    if args.points > 0:
+        branch = branch_row(args.points, max(1, args.repeats - 1), workers)
+        print(f"24-blade ring, continuation ({branch['points']} points): {branch['wall_point_1']:.2f} s a point "
+              f"with one thread, {branch['wall_point_w']:.2f} s with {workers}: {branch['speedup']:.2f} x faster")
+    C.print_load("at end")
+    path = C.write_json("ring_jacobian", {"benchmark": "ring_jacobian", "workers": workers, "steps_per_period": STEPS,
+                                          "repeats": args.repeats, "jacobian": rows, "branch": branch,
+                                          "machine": C.machine(), "elapsed_s": time.time() - t0})
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

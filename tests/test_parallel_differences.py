@@ -1,0 +1,114 @@
+"""Difference Jacobians of the period map in threads: the same numbers as one thread, and a ring's branch.
+
+The per-contact kernel has no tangent, so a bladed disk's Jacobian is ``2 n`` integrations
+of a period; ``PeriodMap(workers=...)`` shares them among threads, each integrating with its
+own copy of the integrator's work arrays. Nothing here times anything: the threads must give
+the same Jacobian, orbit and branch as one thread, to the bit (``benchmarks/ring_jacobian.py``
+measures the speed).
+"""
+
+import numpy as np
+import pytest
+
+from blademodel.config import BladedDisk
+from blademodel.numeric import simulate
+from blademodel.numeric.kernels import make_integrator
+from blademodel.orbits import FlowError, PeriodMap, continuation
+from blademodel.orbits.period_map import worker_count
+from blademodel.zheng2022 import BladePair
+
+RING = dict(blades=4, engine_order=1, friction="coulomb", mistuning=[0, 0.03, -0.02, 0.01])
+
+
+def _section(ig, periods=30):
+    """A state at ``t = 0`` on the attractor's way (events in every period) and its modes."""
+    y = ig.initial_state()
+    mode = ig.mode_of(y)
+    status, mode, _ = ig.advance(y, mode, 0, periods)
+    assert status == 0
+    return y[:ig.n_physical].copy(), mode
+
+
+@pytest.fixture(scope="module")
+def ring():
+    ig = make_integrator(BladedDisk(**RING).build())
+    y, mode = _section(ig)
+    return ig, y, mode
+
+
+def test_a_worker_integrates_as_its_integrator_with_arrays_of_its_own(ring):
+    ig, y, mode = ring
+    w = ig.worker()
+    for a, b in ((ig.WI, w.WI), (ig.WF, w.WF), (ig.SC, w.SC), (ig.GS, w.GS)):
+        assert not np.shares_memory(a, b)
+    assert w.I is ig.I and w.R is ig.R   # the model's tables are shared, read only
+    ends = []
+    for g in (ig, w):
+        full = np.zeros(ig.n_state)
+        full[:y.size] = y
+        status, m_end, _ = g.advance(full, mode, 0, 2)
+        ends.append((status, full, m_end))
+    assert ends[0][0] == ends[1][0] == 0
+    assert np.array_equal(ends[0][1], ends[1][1]) and np.array_equal(ends[0][2], ends[1][2])
+
+
+@pytest.mark.parametrize("workers", [2, 3])
+def test_a_ring_jacobian_in_threads_is_the_serial_one_to_the_bit(ring, workers):
+    ig, y, mode = ring
+    scale = np.maximum(np.abs(y), 1e-3 * np.abs(y).max())
+    serial = PeriodMap(ig, workers=1)
+    J1 = serial.differences(y, mode, scale)
+    threaded = PeriodMap(ig, workers=workers)
+    Jw = threaded.differences(y, mode, scale)
+    assert np.array_equal(J1, Jw)
+    assert serial.evaluations == threaded.evaluations == 2 * y.size
+    # and it is the derivative: a step along a random direction agrees to second order
+    d = np.random.default_rng(0).standard_normal(y.size) * scale * 1e-7
+    P0, P1 = serial.plain(y, mode), serial.plain(y + d, mode)
+    assert np.linalg.norm(P1 - P0 - J1 @ d) < 1e-4 * np.linalg.norm(P1 - P0)
+
+
+def test_the_pair_differences_in_threads_equal_one_thread():
+    """The product-mode kernel's integrate releases the GIL too; its worker owns its guard buffers."""
+    ig = make_integrator(BladePair(friction="bilinear").build())
+    y, mode = _section(ig, 20)
+    scale = np.maximum(np.abs(y), 1e-3 * np.abs(y).max())
+    J1 = PeriodMap(ig, jacobian="differences", workers=1).differences(y, mode, scale)
+    J2 = PeriodMap(ig, jacobian="differences", workers=2).differences(y, mode, scale)
+    assert np.array_equal(J1, J2)
+
+
+def test_a_failing_integration_in_a_thread_is_the_map_error(ring):
+    ig, y, mode = ring
+    bad = y.copy()
+    bad[0] = np.inf
+    with pytest.raises(FlowError, match="status"):
+        PeriodMap(ig, workers=2).differences(bad, mode, np.ones(y.size))
+
+
+@pytest.mark.parametrize("bad", [0, -2, 1.5, True, "2"])
+def test_workers_must_be_a_count(bad):
+    with pytest.raises(ValueError, match=f"workers = {bad!r}"):
+        worker_count(bad)
+
+
+def test_every_cpu_by_default():
+    assert worker_count(None) == worker_count(-1) >= 1 and worker_count(3) == 3
+
+
+def test_a_ring_branch_in_threads_is_the_serial_one_and_where_long_runs_settle():
+    """A mistuned 4-blade Coulomb ring continued in omega through changes of its stick-slip sequence
+    (grazing points): two threads give the same branch as one, and at its stable points long runs from
+    rest settle onto its orbits."""
+    cfg = BladedDisk(**RING)
+    b1 = continuation(cfg, "omega", 285.0, 295.0, max_points=10, workers=1)
+    b2 = continuation(cfg, "omega", 285.0, 295.0, max_points=10, workers=2)
+    for a in ("params", "states", "multipliers", "harmonics", "events"):
+        assert np.array_equal(getattr(b1, a), getattr(b2, a)), a
+    assert [(s.kind, s.param) for s in b1.special] == [(s.kind, s.param) for s in b2.special]
+    assert len(set(b1.events.tolist())) > 1   # the branch crosses changes of its event sequence
+    scale = np.max(np.abs(b1.states), axis=0)
+    for k in (0, len(b1.params) - 1):
+        assert b1.stable[k]
+        r = simulate(cfg.model_copy(update={"omega": float(b1.params[k])}).build(), transient=300, periods=1)
+        assert np.max(np.abs(r.poincare[-1][:scale.size] - b1.states[k]) / scale) < 1e-8
