@@ -81,6 +81,34 @@ def test_parameter_values_make_the_integrator_with_parameters_makes():
         ig.with_parameter_values(stiff)
 
 
+@pytest.mark.parametrize("update", [{"omega": 287.0}, {"gamma": 6.0}, {"mu": 0.3, "gap": 1e-5},
+                                    {"mistuning": [0.0, 0.05, -0.01, 0.02]}])
+def test_a_ring_integrator_with_new_parameters_is_the_one_built_for_them(update):
+    """The per-contact kernel's ``with_parameters``: the same tables, period, stability limit and run as an
+    integrator built for the new model, bit for bit (its stability limits are cached by the modes'
+    Jacobians, so a stiffer contact must not reuse the old limit); another structure is refused, and an
+    unstable step is refused as at construction."""
+    from blademodel.config import BladedDisk
+    from blademodel.numeric.integrator import StructureMismatch
+    cfg = BladedDisk(blades=4, engine_order=1, friction="coulomb", mistuning=[0, 0.03, -0.02, 0.01])
+    ig = make_integrator(cfg.build())
+    model = cfg.model_copy(update=update).build()
+    a, b = ig.with_parameters(model), make_integrator(model)
+    assert a.period == b.period and np.array_equal(a.R, b.R) and np.array_equal(a.I, b.I)
+    assert a.max_stable_step() == b.max_stable_step()
+    ends = []
+    for g in (a, b):
+        y = g.initial_state()
+        status, mode, _ = g.advance(y, g.mode_of(y), 0, 10)
+        ends.append((status, y, mode))
+    assert ends[0][0] == ends[1][0] == 0
+    assert np.array_equal(ends[0][1], ends[1][1]) and np.array_equal(ends[0][2], ends[1][2])
+    with pytest.raises(StructureMismatch, match="same structure"):
+        ig.with_parameters(BladedDisk(blades=5, friction="coulomb").build())
+    with pytest.raises(StepTooLargeError, match="steps_per_period >="):
+        ig.with_parameters(cfg.model_copy(update={"gamma": 1e5}).build())
+
+
 @pytest.mark.parametrize("method", ["rk4", "rk8"])
 def test_a_certain_step_is_stable_up_to_the_first_root_on_each_ray(method):
     """``certain_step`` is the first positive root of ``|R(r lam)|^2 = 1`` over the eigenvalues: every step up to

@@ -16,6 +16,7 @@ Cache layout (in :func:`~blademodel.numeric.compiled.cache_dir`):
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 import math
@@ -244,6 +245,10 @@ class ContactIntegrator(Integrator):
                 names.append(st if all_states.count(st) == 1 else f"{st}_{c.name}")
             pos += len(c.friction.states)
         self.n_physical = 2 * n + pos
+        self._layout = (offsets, pos)
+        self._explicit_period = period is not None
+        self._check_stability = bool(check_stability)
+        self._step_limits: dict = {}   # stable step by the modes' Jacobians, shared by with_parameters copies
         self.n_state = self.n_physical + (3 if energy else 0)
         self.energy = energy
         self.param_names = list(model.parameters)
@@ -261,17 +266,58 @@ class ContactIntegrator(Integrator):
         self.event_location = check_event_location(event_location)
         self.max_pivots = int(max_pivots) if max_pivots is not None else 4 * self.nc + 20
         self.method = get_method(method)
-        self.I, self.R, self.WI, self.WF = pack_tables(self.tables, self.n_state, method, self.kmeta["gmax"])
-        self.SC = np.zeros((contract.SC_ROWS + max(self.method.stages - 1, 0), self.n_state))
-        self.GS = np.zeros((contract.GS_ROWS, max(self.nc, 1), self.kmeta["gmax"]))
+        self._pack()
         if max([len(k["states"]) for k in self.kmeta["kinds"]] + [0]) > contract.MAX_LAW_STATES:
             raise ValueError(f"a friction law has more than {contract.MAX_LAW_STATES} states")
-        if check_stability:
+        self._check_step()
+        self._empty_log = self.log_buffer(0)
+
+    def _pack(self) -> None:
+        """The kernel's tables from ``self.tables``, and fresh work arrays."""
+        self.I, self.R, self.WI, self.WF = pack_tables(self.tables, self.n_state, self.method.name, self.kmeta["gmax"])
+        self.SC = np.zeros((contract.SC_ROWS + max(self.method.stages - 1, 0), self.n_state))
+        self.GS = np.zeros((contract.GS_ROWS, max(self.nc, 1), self.kmeta["gmax"]))
+        self._run_end = None
+
+    def _check_step(self) -> None:
+        if self._check_stability:
             from .stability import check_step
             h_max, which = self.max_stable_step()
             check_step(self.period, self.steps_per_period, h_max, which, self.method.name)
-        self._empty_log = self.log_buffer(0)
-        self._run_end = None
+
+    def with_parameters(self, model: Model) -> "ContactIntegrator":
+        """This integrator for ``model``, which differs from its own in parameter values only.
+
+        Nothing is generated or compiled: the copy packs ``model``'s values into
+        tables of its own (and takes its excitation period, unless the period was
+        given explicitly) and checks the step's stability again, from the modes'
+        Jacobians, whose eigenvalue limits are computed once for each set of them
+        and shared by every copy (the excitation frequency, say, moves none).
+        Continuation moves a parameter at every correction.
+
+        Raises
+        ------
+        StructureMismatch
+            If ``model`` has another structure (other components, laws or modes).
+        StepTooLargeError
+            If the step is unstable with the new parameters.
+        """
+        from .integrator import StructureMismatch, excitation_period
+        if model.structure_key() != self.model.structure_key():
+            raise StructureMismatch("with_parameters needs a model of the same structure "
+                                    "(only parameter values may differ)")
+        new = copy.copy(self)
+        new.model = model
+        if not self._explicit_period:
+            new.period = excitation_period(model)
+        offsets, pos = self._layout
+        new.tables = NumericTables(cached_tables(model), model.parameters, self.kind, offsets, self.param_names, pos)
+        new._pack()
+        if not np.array_equal(new.I, self.I):
+            raise StructureMismatch("with_parameters: the model's tables are laid out differently "
+                                    "(only parameter values may differ)")
+        new._check_step()
+        return new
 
     # --- modes and states ---------------------------------------------------------------------
     def record_buffer(self, n_records: int) -> tuple:
@@ -398,7 +444,10 @@ class ContactIntegrator(Integrator):
                 y1 = y0.copy()
                 y1[i] = 1.0
                 J[:, i] = self.rhs(0.0, y1, cm)[:n] - f0
-            h = stable_step(J, self.method.amplification)
+            key = J.tobytes()
+            if key not in self._step_limits:
+                self._step_limits[key] = stable_step(J, self.method.amplification)
+            h = self._step_limits[key]
             if h < best:
                 best, which = h, self.mode_label(cm)
         return best, which
