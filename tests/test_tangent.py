@@ -287,3 +287,29 @@ def test_a_flow_not_affine_in_the_state_is_differentiated_step_by_step():
     d = 1e-6 * ig.p_raw[names.index("c3")]
     fd = (_map(ig, y, mode, 1, p_raw=ig.p_raw + d * dp) - _map(ig, y, mode, 1, p_raw=ig.p_raw - d * dp)) / (2 * d)
     assert np.max(np.abs(s.parameter - fd)) < 1e-6 * np.max(np.abs(s.parameter))
+
+
+def test_the_replay_links_the_kernels_functions_and_its_helpers_are_only_linked():
+    """The tangent module takes the kernel's own compiled functions (it does not compile their source again)
+    and, where this process compiled it, the replay is an entry point whose helpers were only linked
+    (``blademodel.numeric.code_libraries``); where it came from the cache, no helper was compiled at all."""
+    import numba
+    from numba.core.codegen import JITCodeLibrary
+
+    from blademodel.numeric import code_libraries
+    from blademodel.numeric.tangent import sensitivity_module
+    _, ig, y, mode = _settled("coulomb")
+    PeriodMap(ig).derivatives(y, mode)
+    mod = sensitivity_module(ig)
+    for name in ("rk4_step", "rhs", "guards", "transition", "GUARD_DIR"):
+        assert getattr(mod, name) is getattr(ig.module, name)
+    if not numba.__version__.startswith(code_libraries.CHECKED_NUMBA):
+        pytest.skip(f"Numba {numba.__version__} is not a release the pipelines were checked on: Numba's own run")
+    replay = next(iter(mod.replay_tangent.overloads.values())).library
+    helpers = [mod.flow_jacobian, mod.tangent_step, mod.event_time_tangent, mod.queue_whole_steps]
+    if type(replay) is JITCodeLibrary:   # loaded from the cache: its helpers' code is inside it
+        assert not any(h.overloads for h in helpers)
+    else:
+        assert isinstance(replay, code_libraries.EntryPointLibrary)
+        assert all(isinstance(next(iter(h.overloads.values())).library, code_libraries.LinkedOnlyLibrary)
+                   for h in helpers)

@@ -29,6 +29,14 @@ _TEMPLATE_FUNCTIONS = ("flow_jacobian", "flow_partials", "guard_gradient", "rese
                        "reset_tangent", "skip_to", "kernel_step", "same_state", "affine_jacobian", "replay_tangent")
 
 
+#: How the functions of a tangent module are compiled (:mod:`.code_libraries`): the replay is an entry point
+#: called from Python only, ``reset_jacobian`` is called from Python and from the replay (Numba's own
+#: pipeline); the others are only linked into the replay (no wrappers, no machine code of their own).
+#: Only the functions called from Python are cached: the others' code is cached inside the replay's.
+_TANGENT_PIPELINES = {"replay_tangent": "cache=True, pipeline_class=EntryPointCompiler", "reset_jacobian": "cache=True"}
+_LINKED_ONLY = "no_cpython_wrapper=True, no_cfunc_wrapper=True, pipeline_class=LinkedOnlyCompiler"
+
+
 class SensitivityError(RuntimeError):
     """The tangent integration could not follow the kernel's run (status and time in the message)."""
 
@@ -68,7 +76,7 @@ def sensitivity_module(integrator) -> ModuleType:
         return _MODULES[compiled.path]
     here = PACKAGE / "numeric"
     key = hash_sources([compiled.path, here / "sensitivity_codegen.py", here / "tangent_loop.py",
-                        here / "contract.py"])
+                        here / "contract.py", here / "tangent.py", here / "code_libraries.py"])
     path = cache_dir() / f"t_{compiled.path.stem}_{key}.py"
     if not path.exists():
         import inspect
@@ -76,10 +84,15 @@ def sensitivity_module(integrator) -> ModuleType:
         from . import tangent_loop
         from .sensitivity_codegen import sensitivity_source
         system = derive_cached(integrator.model)
-        L = [compiled.path.read_text(), "", "# ---- derivatives (blademodel/numeric/sensitivity_codegen.py) ----",
+        L = ["import math", "import sys as _sys", "import numpy as np", "from numba import njit", "",
+             "# the kernel's functions and tables, compiled (or loaded) once for the kernel itself",
+             f"_kernel = _sys.modules[{integrator.module.__name__!r}]",
+             "globals().update({_n: getattr(_kernel, _n) for _n in dir(_kernel) if not _n.startswith('__')})",
+             "", "# ---- derivatives (blademodel/numeric/sensitivity_codegen.py) ----",
              sensitivity_source(system), "# ---- tangent replay (blademodel/numeric/tangent_loop.py) ----",
              inspect.getsource(tangent_loop), ""]
-        L += [f"{fn} = njit(cache=True)({fn})" for fn in _TEMPLATE_FUNCTIONS]
+        L += ["from blademodel.numeric.code_libraries import EntryPointCompiler, LinkedOnlyCompiler", ""]
+        L += [f"{fn} = njit({_TANGENT_PIPELINES.get(fn, _LINKED_ONLY)})({fn})" for fn in _TEMPLATE_FUNCTIONS]
         tmp = path.with_suffix(f".tmp{os.getpid()}")
         tmp.write_text("\n".join(L) + "\n")
         os.replace(tmp, path)
