@@ -20,6 +20,12 @@ from blademodel.zheng2022 import BladePair
 RING = dict(blades=4, engine_order=1, friction="coulomb", mistuning=[0, 0.03, -0.02, 0.01])
 
 
+@pytest.fixture(autouse=True)
+def always_threads(monkeypatch):
+    """Threads for every Jacobian here, however short its columns (these models are small)."""
+    monkeypatch.setattr(PeriodMap, "thread_column_seconds", 0.0)
+
+
 def _section(ig, periods=30):
     """A state at ``t = 0`` on the attractor's way (events in every period) and its modes."""
     y = ig.initial_state()
@@ -112,3 +118,20 @@ def test_a_ring_branch_in_threads_is_the_serial_one_and_where_long_runs_settle()
         assert b1.stable[k]
         r = simulate(cfg.model_copy(update={"omega": float(b1.params[k])}).build(), transient=300, periods=1)
         assert np.max(np.abs(r.poincare[-1][:scale.size] - b1.states[k]) / scale) < 1e-8
+
+
+def test_short_columns_stay_in_one_thread(ring, monkeypatch):
+    """Where a column takes less than ``thread_column_seconds`` no thread (and no worker copy) is made."""
+    from blademodel.numeric.integrator import Integrator
+    ig, y, mode = ring
+    scale = np.maximum(np.abs(y), 1e-3 * np.abs(y).max())
+    J1 = PeriodMap(ig, workers=1).differences(y, mode, scale)
+
+    def no_copies(self):
+        raise AssertionError("a worker copy was made")
+    monkeypatch.setattr(Integrator, "worker", no_copies)
+    monkeypatch.setattr(PeriodMap, "thread_column_seconds", 60.0)
+    assert np.array_equal(PeriodMap(ig, workers=2).differences(y, mode, scale), J1)
+    monkeypatch.setattr(PeriodMap, "thread_column_seconds", 0.0)
+    with pytest.raises(AssertionError, match="worker copy"):
+        PeriodMap(ig, workers=2).differences(y, mode, scale)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -84,9 +85,14 @@ class PeriodMap:
     workers : int, optional
         Threads that integrate the difference quotients of :meth:`differences` (each
         with its own copy of the integrator's work arrays; the kernels release the GIL):
-        ``None`` or ``-1`` for every CPU this process may use, ``1`` for none. The
-        Jacobian is the same to the bit whatever the number.
+        ``None`` or ``-1`` for every CPU this process may use, ``1`` for none; used
+        where a column takes at least :attr:`thread_column_seconds`. The Jacobian is
+        the same to the bit whatever the number.
     """
+
+    #: A Jacobian by differences is shared among threads only where one column (two integrations) takes at
+    #: least this long (s): on the pair (0.6 ms a column) a thread pool costs more than it saves.
+    thread_column_seconds = 2e-3
 
     def __init__(self, integrator, periods: int = 1, jacobian: str = "auto", workers: int | None = None):
         if int(periods) < 1:
@@ -236,8 +242,10 @@ class PeriodMap:
     def differences(self, y, mode, scale, rel_step: float = 1e-6) -> np.ndarray:
         """``dP/dy`` by central differences, column ``i`` with step ``rel_step * scale[i]`` (see :meth:`jacobian`).
 
-        The columns are shared among ``workers`` threads, each integrating with its own
+        The first column is timed; if it took at least :attr:`thread_column_seconds`,
+        the others are shared among ``workers`` threads, each integrating with its own
         copy of the integrator (:meth:`~blademodel.numeric.integrator.Integrator.worker`).
+        The result does not depend on how they were shared.
         """
         y = np.asarray(y, dtype=float)
         J = np.empty((self.n, self.n))
@@ -250,15 +258,17 @@ class PeriodMap:
                 ym[i] -= d
                 J[:, i] = (_plain_map(ig, self.periods, yp, mode) - _plain_map(ig, self.periods, ym, mode)) / (2.0 * d)
 
-        w = min(self.workers, self.n)
-        if w <= 1:
-            columns(self.integrator, range(self.n))
+        t0 = time.perf_counter()
+        columns(self.integrator, range(1))
+        w = min(self.workers, self.n - 1)
+        if w <= 1 or time.perf_counter() - t0 < self.thread_column_seconds:
+            columns(self.integrator, range(1, self.n))
         else:
             from concurrent.futures import ThreadPoolExecutor
             with ThreadPoolExecutor(max_workers=w) as pool:
                 # round robin: columns of neighbouring states cost alike, so each thread gets its share
                 done = pool.map(columns, [self.integrator.worker() for _ in range(w)],
-                                [range(k, self.n, w) for k in range(w)])
+                                [range(1 + k, self.n, w) for k in range(w)])
                 list(done)   # re-raises a worker's FlowError here
         self.evaluations += 2 * self.n
         return J
