@@ -135,3 +135,30 @@ def test_short_columns_stay_in_one_thread(ring, monkeypatch):
     monkeypatch.setattr(PeriodMap, "thread_column_seconds", 0.0)
     with pytest.raises(AssertionError, match="worker copy"):
         PeriodMap(ig, workers=2).differences(y, mode, scale)
+
+
+def test_after_a_failure_the_other_threads_stop_at_their_next_column(ring, monkeypatch):
+    """A FlowError (or a Ctrl-C) in one column ends the Jacobian promptly: the other threads do not go on
+    integrating their remaining columns."""
+    import threading
+    import time
+
+    from blademodel.orbits import period_map
+    ig, y, mode = ring
+    scale = np.ones(y.size)
+    plain = period_map._plain_map
+    calls, lock = [], threading.Lock()
+
+    def slow_or_failing(g, periods, yy, m):
+        i = int(np.argmax(np.abs(yy - y)))
+        with lock:
+            calls.append(i)
+        if i == 1:   # thread 0's first column after the timed one
+            raise FlowError("the integration stopped at t = 0 s with status 1")
+        time.sleep(0.05)
+        return plain(g, periods, yy, m)
+    monkeypatch.setattr(period_map, "_plain_map", slow_or_failing)
+    with pytest.raises(FlowError):
+        PeriodMap(ig, workers=2).differences(y, mode, scale)
+    others = [i for i in calls if i not in (0, 1)]
+    assert len(others) <= 4 < 2 * (y.size - 2) // 2   # at most two columns of thread 1's seven

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import threading
 import time
 from dataclasses import dataclass
 
@@ -250,8 +251,12 @@ class PeriodMap:
         y = np.asarray(y, dtype=float)
         J = np.empty((self.n, self.n))
 
+        stop = threading.Event()
+
         def columns(ig, cols):
             for i in cols:
+                if stop.is_set():
+                    return
                 d = rel_step * scale[i]
                 yp, ym = y.copy(), y.copy()
                 yp[i] += d
@@ -267,9 +272,12 @@ class PeriodMap:
             from concurrent.futures import ThreadPoolExecutor
             with ThreadPoolExecutor(max_workers=w) as pool:
                 # round robin: columns of neighbouring states cost alike, so each thread gets its share
-                done = pool.map(columns, [self.integrator.worker() for _ in range(w)],
-                                [range(1 + k, self.n, w) for k in range(w)])
-                list(done)   # re-raises a worker's FlowError here
+                jobs = [pool.submit(columns, self.integrator.worker(), range(1 + k, self.n, w)) for k in range(w)]
+                try:
+                    for job in jobs:
+                        job.result()   # re-raises a worker's FlowError here
+                finally:
+                    stop.set()   # after an error or a Ctrl-C the other threads end at their next column
         self.evaluations += 2 * self.n
         return J
 
