@@ -162,3 +162,26 @@ def test_after_a_failure_the_other_threads_stop_at_their_next_column(ring, monke
         PeriodMap(ig, workers=2).differences(y, mode, scale)
     others = [i for i in calls if i not in (0, 1)]
     assert len(others) <= 4 < 2 * (y.size - 2) // 2   # at most two columns of thread 1's seven
+
+
+def test_forward_differences_halve_the_integrations_and_keep_the_orbit():
+    """``jacobian="forward"``: ``n + 1`` integrations a Jacobian instead of ``2 n``, the same in threads as in
+    one thread, and shooting with it finds the orbit central differences find (the residual decides where
+    Newton stops, not the Jacobian) with the multipliers to about the step (``rel_step = 1e-6``)."""
+    from blademodel.orbits import find_periodic_orbit
+    m = BladedDisk(**RING).build()
+    ig = make_integrator(m)
+    y, mode = _section(ig)
+    scale = np.maximum(np.abs(y), 1e-3 * np.abs(y).max())
+    one, two = PeriodMap(ig, jacobian="forward", workers=1), PeriodMap(ig, jacobian="forward", workers=2)
+    Jf = one.differences(y, mode, scale)
+    assert np.array_equal(Jf, two.differences(y, mode, scale))
+    assert one.evaluations == two.evaluations == y.size + 1
+    Jc = PeriodMap(ig, workers=1).differences(y, mode, scale)
+    rel = np.abs(Jf - Jc) * scale[None, :] / scale[:, None]
+    assert 0 < np.max(rel) < 1e-3   # a first-order error: not zero, small
+    oc = find_periodic_orbit(m, transient=5, jacobian="differences", workers=1)
+    of = find_periodic_orbit(m, transient=5, jacobian="forward", workers=1)
+    assert np.max(np.abs(of.state - oc.state) / oc.scale) < 1e-10
+    gap = np.max(np.abs(np.sort_complex(of.multipliers) - np.sort_complex(oc.multipliers)))
+    assert 0 < gap < 1e-5

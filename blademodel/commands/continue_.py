@@ -43,6 +43,10 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--state", default=None, help="state plotted and reported (default: the first coordinate)")
     p.add_argument("--out", metavar="FILE.nc", help="write the branch (NetCDF)")
     p.add_argument("--plot", metavar="FILE.png", help="draw the branch (stable solid, unstable dashed)")
+    p.add_argument("--jacobian", choices=("auto", "tangent", "differences", "forward"), default="auto",
+                   help="how the period map is differentiated: auto (the tangent of the flow, or central "
+                        "differences on bladed disks), tangent, differences (central), forward (half the "
+                        "integrations of central differences, multipliers to about 1e-6)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="threads for Jacobians by differences, as on bladed disks (default: all cores; the "
                         "branch is the same whatever N)")
@@ -107,7 +111,8 @@ def run(args: argparse.Namespace) -> int:
         branch = continuation(config, args.param, args.start, args.stop, periods=args.period,
                               transient=args.transient, max_points=args.max_points, ds_max=args.ds_max,
                               steps_per_period=args.steps_per_period, event_tol=args.event_tol, method=args.method,
-                              workers=args.workers, progress=(progress := _reporter("branch", args.param)))
+                              jacobian=args.jacobian, workers=args.workers,
+                              progress=(progress := _reporter("branch", args.param)))
     except (ShootingError, FlowError) as e:
         progress.interrupt()
         print(f"error: {e}", file=sys.stderr)
@@ -120,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
                 doubled.append(period_doubled_branch(
                     config, args.param, pd, args.start, args.stop, periods=args.period, max_points=args.max_points,
                     ds_max=args.ds_max, steps_per_period=args.steps_per_period, event_tol=args.event_tol,
-                    method=args.method, workers=args.workers,
+                    method=args.method, jacobian=args.jacobian, workers=args.workers,
                     progress=(progress := _reporter(f"period-doubled branch {k}", args.param))))
             except (ShootingError, FlowError) as e:
                 progress.interrupt()

@@ -29,6 +29,10 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--tol", type=float, default=1e-10, help="scaled residual to reach (default 1e-10)")
     p.add_argument("--max-iter", type=int, default=30, metavar="K", help="Newton steps allowed (default 30)")
     add_stepping_arguments(p)
+    p.add_argument("--jacobian", choices=("auto", "tangent", "differences", "forward"), default="auto",
+                   help="how the period map is differentiated: auto (the tangent of the flow, or central "
+                        "differences on bladed disks), tangent, differences (central), forward (half the "
+                        "integrations of central differences, multipliers to about 1e-6)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="threads for a Jacobian by differences, as on bladed disks (default: all cores)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -68,7 +72,8 @@ def run(args: argparse.Namespace) -> int:
                          method=args.method)
     try:
         orbit = find_periodic_orbit(model, periods=args.periods, transient=args.transient, tol=args.tol,
-                                    max_iter=args.max_iter, integrator=ig, workers=args.workers)
+                                    max_iter=args.max_iter, integrator=ig, jacobian=args.jacobian,
+                                    workers=args.workers)
     except (ShootingError, FlowError, SimulationError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 1

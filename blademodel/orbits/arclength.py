@@ -259,8 +259,9 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         Bifurcations are located to this fraction of the range.
     steps_per_period, event_tol, method, kernel
         The integrator's settings.
-    jacobian : {"auto", "tangent", "differences"}
-        How the period map is differentiated (:class:`~blademodel.orbits.period_map.PeriodMap`).
+    jacobian : {"auto", "tangent", "differences", "forward"}
+        How the period map is differentiated (:class:`~blademodel.orbits.period_map.PeriodMap`);
+        ``"forward"`` halves the integrations of a ring's Jacobian (multipliers to about ``rel_step``).
     workers : int, optional
         Threads for the difference quotients where the map is differentiated by
         differences (rings): ``None`` or ``-1`` every CPU, ``1`` none. The branch is the

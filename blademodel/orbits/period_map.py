@@ -12,9 +12,10 @@ import numpy as np
 from ..numeric.contract import C_EVENTS, C_LOGGED, N_COUNTERS
 
 #: How a :class:`PeriodMap` differentiates: ``"auto"`` (the tangent where the kernel has one, else
-#: differences), ``"tangent"`` (variational equations and saltation matrices, or an error) or
-#: ``"differences"`` (central differences of the map).
-JACOBIAN_METHODS = ("auto", "tangent", "differences")
+#: differences), ``"tangent"`` (variational equations and saltation matrices, or an error),
+#: ``"differences"`` (central differences of the map, ``2 n`` integrations) or ``"forward"``
+#: (forward differences, ``n + 1`` integrations, an error of about the step).
+JACOBIAN_METHODS = ("auto", "tangent", "differences", "forward")
 
 
 class FlowError(RuntimeError):
@@ -77,12 +78,14 @@ class PeriodMap:
         From :func:`blademodel.numeric.kernels.make_integrator` (either kernel).
     periods : int
         ``n``: the map covers ``n T``.
-    jacobian : {"auto", "tangent", "differences"}
+    jacobian : {"auto", "tangent", "differences", "forward"}
         How :meth:`jacobian` differentiates. The tangent (:mod:`blademodel.numeric.tangent`:
         the exact derivative of the kernel's discrete flow, saltation matrices at the
         events) exists for the product-mode kernel; ``"auto"`` takes it there and falls
         back to central differences elsewhere, or where the tangent fails (an event
-        with a zero guard rate).
+        with a zero guard rate). ``"forward"`` takes forward differences everywhere: half
+        the integrations of central ones, the multipliers to about ``rel_step``
+        (``docs/orbits.md``).
     workers : int, optional
         Threads that integrate the difference quotients of :meth:`differences` (each
         with its own copy of the integrator's work arrays; the kernels release the GIL):
@@ -110,7 +113,7 @@ class PeriodMap:
         self.evaluations = 0
         self.last_events = -1
         self.method = jacobian
-        self.exact = jacobian != "differences" and product
+        self.exact = jacobian in ("auto", "tangent") and product
         self._last: tuple | None = None   # (key, MapRun) of the last run
         self._log_size = 64
 
@@ -241,16 +244,18 @@ class PeriodMap:
         return Py
 
     def differences(self, y, mode, scale, rel_step: float = 1e-6) -> np.ndarray:
-        """``dP/dy`` by central differences, column ``i`` with step ``rel_step * scale[i]`` (see :meth:`jacobian`).
+        """``dP/dy`` by differences, column ``i`` with step ``rel_step * scale[i]`` (see :meth:`jacobian`).
 
-        The first column is timed; if it took at least :attr:`thread_column_seconds`,
-        the others are shared among ``workers`` threads, each integrating with its own
-        copy of the integrator (:meth:`~blademodel.numeric.integrator.Integrator.worker`).
-        The result does not depend on how they were shared.
+        Central differences (``2 n`` integrations), or forward ones from ``P(y)`` where
+        the map was made with ``jacobian="forward"`` (``n + 1``). The first column is
+        timed; if it took at least :attr:`thread_column_seconds`, the others are shared
+        among ``workers`` threads, each integrating with its own copy of the integrator
+        (:meth:`~blademodel.numeric.integrator.Integrator.worker`). The result does not
+        depend on how they were shared.
         """
         y = np.asarray(y, dtype=float)
         J = np.empty((self.n, self.n))
-
+        base = _plain_map(self.integrator, self.periods, y, mode) if self.method == "forward" else None
         stop = threading.Event()
 
         def columns(ig, cols):
@@ -258,8 +263,12 @@ class PeriodMap:
                 if stop.is_set():
                     return
                 d = rel_step * scale[i]
-                yp, ym = y.copy(), y.copy()
+                yp = y.copy()
                 yp[i] += d
+                if base is not None:
+                    J[:, i] = (_plain_map(ig, self.periods, yp, mode) - base) / d
+                    continue
+                ym = y.copy()
                 ym[i] -= d
                 J[:, i] = (_plain_map(ig, self.periods, yp, mode) - _plain_map(ig, self.periods, ym, mode)) / (2.0 * d)
 
@@ -278,7 +287,7 @@ class PeriodMap:
                         job.result()   # re-raises a worker's FlowError here
                 finally:
                     stop.set()   # after an error or a Ctrl-C the other threads end at their next column
-        self.evaluations += 2 * self.n
+        self.evaluations += self.n + 1 if base is not None else 2 * self.n
         return J
 
 

@@ -140,7 +140,7 @@ def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, trans
         The integrator's settings (:func:`blademodel.numeric.simulate`).
     integrator : Integrator, optional
         Use this integrator (its settings) instead of making one.
-    jacobian : {"auto", "tangent", "differences"}
+    jacobian : {"auto", "tangent", "differences", "forward"}
         How ``dP/dy`` is formed (:class:`~blademodel.orbits.period_map.PeriodMap`): the
         tangent of the flow (variational equations, saltation matrices) on the
         product-mode kernel, central differences elsewhere.
