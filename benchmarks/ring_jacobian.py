@@ -13,6 +13,10 @@ Jacobian with one thread and with every CPU, repeats interleaved, minimum taken:
 * *CPU overhead*: the process's CPU time (every thread) with every CPU / with one thread
   (what the threads cost on top, in contention and in copying work arrays).
 
+And with forward differences (``jacobian="forward"``, ``n + 1`` integrations), every CPU:
+its wall time against the central one's with every CPU, and how far its multipliers'
+moduli are from the central ones'.
+
 Then a short continuation of the 24-blade ring in omega (``--points`` points from 280
 rad/s), one thread against every CPU, interleaved: its wall time per point. Every
 threaded Jacobian and branch is checked to equal the one-thread one to the bit.
@@ -57,21 +61,28 @@ def jacobian_rows(blades_list, repeats, workers):
         assert status == 0
         y = y[:ig.n_physical].copy()
         scale = np.maximum(np.abs(y), 1e-3 * np.abs(y).max())
-        runs = {1: [], workers: []}
-        ref = None
+        runs = {1: [], workers: [], "forward": []}
+        ref = fwd = None
         for _ in range(repeats):
             for w in runs:
-                J, wall, cpu = clocks(lambda: PeriodMap(ig, workers=w).differences(y, mode, scale))
-                ref = J if ref is None else ref
-                if not np.array_equal(J, ref):
-                    raise AssertionError(f"{blades} blades: the Jacobian with {w} threads differs from one thread's")
+                pm = PeriodMap(ig, jacobian="forward", workers=workers) if w == "forward" else PeriodMap(ig, workers=w)
+                J, wall, cpu = clocks(lambda: pm.differences(y, mode, scale))
+                if w == "forward":
+                    fwd = J
+                else:
+                    ref = J if ref is None else ref
+                    if not np.array_equal(J, ref):
+                        raise AssertionError(f"{blades} blades: the Jacobian with {w} threads differs from one thread's")
                 runs[w].append((wall, cpu))
-        one, many = (min(runs[w]) for w in (1, workers))
+        one, many, forward = (min(runs[w]) for w in (1, workers, "forward"))
         cpu1, cpuw = min(c for _, c in runs[1]), min(c for _, c in runs[workers])
+        mu_c, mu_f = (np.sort(np.abs(np.linalg.eigvals(J)))[::-1] for J in (ref, fwd))
         rows.append({"blades": blades, "states": y.size, "integrations": 2 * y.size, "wall_1": one[0],
                      "wall_w": many[0], "speedup": one[0] / many[0], "cpu_1": cpu1, "cpu_w": cpuw,
-                     "cpu_overhead": cpuw / cpu1})
-        print(f"  {blades} blades: {rows[-1]['speedup']:.2f} x faster, CPU x {rows[-1]['cpu_overhead']:.2f}", flush=True)
+                     "cpu_overhead": cpuw / cpu1, "wall_forward": forward[0], "forward_gain": many[0] / forward[0],
+                     "forward_mu1_error": abs(mu_f[0] - mu_c[0]), "forward_mu_error": float(np.max(np.abs(mu_f - mu_c)))})
+        print(f"  {blades} blades: {rows[-1]['speedup']:.2f} x faster, CPU x {rows[-1]['cpu_overhead']:.2f}; forward "
+              f"{rows[-1]['forward_gain']:.2f} x faster again, |mu1| off by {rows[-1]['forward_mu1_error']:.1e}", flush=True)
     return rows
 
 
@@ -108,7 +119,10 @@ def main() -> int:
     rows = jacobian_rows(args.blades, args.repeats, workers)
     print(C.table(rows, [("blades", "blades", "d"), ("states", "states", "d"), ("integrations", "integrations", "d"),
                          ("wall_1", "1 thread s", ".2f"), ("wall_w", f"{workers} threads s", ".2f"),
-                         ("speedup", "speed-up", ".2f"), ("cpu_overhead", "CPU overhead", ".2f")]))
+                         ("speedup", "speed-up", ".2f"), ("cpu_overhead", "CPU overhead", ".2f"),
+                         ("wall_forward", "forward s", ".2f"), ("forward_gain", "central / forward", ".2f"),
+                         ("forward_mu1_error", "forward |mu1| error", ".1e"),
+                         ("forward_mu_error", "largest |mu| error", ".1e")]))
     branch = None
     if args.points > 0:
         branch = branch_row(args.points, max(1, args.repeats - 1), workers)
