@@ -444,8 +444,10 @@ class ContactIntegrator(Integrator):
                 y1 = y0.copy()
                 y1[i] = 1.0
                 J[:, i] = self.rhs(0.0, y1, cm)[:n] - f0
-            key = J.tobytes()
+            key = hashlib.blake2b(J.tobytes(), digest_size=16).digest()   # not the matrix: 73 kB at 24 blades
             if key not in self._step_limits:
+                if len(self._step_limits) >= 256:   # a continuation in a stiffness makes new ones at every value
+                    self._step_limits.pop(next(iter(self._step_limits)))
                 self._step_limits[key] = stable_step(J, self.method.amplification)
             h = self._step_limits[key]
             if h < best:
