@@ -13,7 +13,7 @@ import pytest
 from blademodel.config import BladedDisk
 from blademodel.numeric import simulate
 from blademodel.numeric.kernels import make_integrator
-from blademodel.orbits import FlowError, PeriodMap, continuation
+from blademodel.orbits import FlowError, PeriodMap, continuation, find_periodic_orbit
 from blademodel.orbits.period_map import worker_count
 from blademodel.zheng2022 import BladePair
 
@@ -168,7 +168,6 @@ def test_forward_differences_halve_the_integrations_and_keep_the_orbit():
     """``jacobian="forward"``: ``n + 1`` integrations a Jacobian instead of ``2 n``, the same in threads as in
     one thread, and shooting with it finds the orbit central differences find (the residual decides where
     Newton stops, not the Jacobian) with the multipliers to about the step (``rel_step = 1e-6``)."""
-    from blademodel.orbits import find_periodic_orbit
     m = BladedDisk(**RING).build()
     ig = make_integrator(m)
     y, mode = _section(ig)
@@ -185,3 +184,23 @@ def test_forward_differences_halve_the_integrations_and_keep_the_orbit():
     assert np.max(np.abs(of.state - oc.state) / oc.scale) < 1e-10
     gap = np.max(np.abs(np.sort_complex(of.multipliers) - np.sort_complex(oc.multipliers)))
     assert 0 < gap < 1e-5
+
+
+def test_the_orbit_command_on_a_ring_with_forward_differences_in_threads(tmp_path, capsys):
+    """``blademodel orbit RING.yaml --jacobian forward --workers 2 --json`` gives the orbit of the Python call
+    with central differences (to the tolerance) and a bad ``--workers`` exits 2 naming it."""
+    import json
+
+    import yaml
+
+    from blademodel.cli import main
+    path = tmp_path / "ring.yaml"
+    path.write_text(yaml.safe_dump({"model": "bladed_disk", **RING}))
+    assert main(["orbit", str(path), "--transient", "5", "--jacobian", "forward", "--workers", "2", "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    o = find_periodic_orbit(BladedDisk(**RING).build(), transient=5, jacobian="differences", workers=1)
+    got = np.array([rep["state"][n] for n in o.state_names])
+    assert np.max(np.abs(got - o.state) / o.scale) < 1e-9
+    assert abs(rep["multipliers"][0]["abs"] - abs(o.multipliers[0])) < 1e-5
+    assert main(["orbit", str(path), "--workers", "0"]) == 2
+    assert "workers = 0" in capsys.readouterr().err
