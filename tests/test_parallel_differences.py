@@ -176,6 +176,8 @@ def test_forward_differences_halve_the_integrations_and_keep_the_orbit():
     Jf = one.differences(y, mode, scale)
     assert np.array_equal(Jf, two.differences(y, mode, scale))
     assert one.evaluations == two.evaluations == y.size + 1
+    before = one.evaluations   # again at the same point: P(y) is the map's kept run, n integrations
+    assert np.array_equal(one.differences(y, mode, scale), Jf) and one.evaluations - before == y.size
     Jc = PeriodMap(ig, workers=1).differences(y, mode, scale)
     rel = np.abs(Jf - Jc) * scale[None, :] / scale[:, None]
     assert 0 < np.max(rel) < 1e-3   # a first-order error: not zero, small

@@ -231,7 +231,7 @@ class ContactIntegrator(Integrator):
                  max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
                  check_stability: bool = True, max_pivots: int | None = None, detect_grazing: bool = True,
                  event_location: str = "predicted", method: str = "rk4", local_events: bool = True):
-        self._settings(model, steps_per_period, event_tol, max_events_per_step, period)
+        self._settings(model, steps_per_period, event_tol, max_events_per_step, period, check_stability)
         self.module, self.kmeta = compile_contact_kernel(model)
         laws, kind = law_kinds(model)
         self.kind = kind
@@ -246,8 +246,6 @@ class ContactIntegrator(Integrator):
             pos += len(c.friction.states)
         self.n_physical = 2 * n + pos
         self._layout = (offsets, pos)
-        self._explicit_period = period is not None
-        self._check_stability = bool(check_stability)
         self._step_limits: dict = {}   # stable step by the modes' Jacobians, shared by with_parameters copies
         self.n_state = self.n_physical + (3 if energy else 0)
         self.energy = energy
@@ -302,14 +300,13 @@ class ContactIntegrator(Integrator):
         StepTooLargeError
             If the step is unstable with the new parameters.
         """
-        from .integrator import StructureMismatch, excitation_period
-        if model.structure_key() != self.model.structure_key():
-            raise StructureMismatch("with_parameters needs a model of the same structure "
-                                    "(only parameter values may differ)")
+        from .integrator import StructureMismatch
+        self._check_same_structure(model)
         new = copy.copy(self)
         new.model = model
-        if not self._explicit_period:
-            new.period = excitation_period(model)
+        period = self._new_period(model)
+        if period is not None:
+            new.period = period
         offsets, pos = self._layout
         new.tables = NumericTables(cached_tables(model), model.parameters, self.kind, offsets, self.param_names, pos)
         new._pack()

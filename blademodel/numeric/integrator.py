@@ -182,13 +182,26 @@ class Integrator:
     #: Which kernel integrates (``"product"`` or ``"contact"``).
     kernel = ""
 
-    def _settings(self, model: Model, steps_per_period, event_tol, max_events_per_step, period) -> None:
+    def _settings(self, model: Model, steps_per_period, event_tol, max_events_per_step, period,
+                  check_stability: bool = True) -> None:
         check_settings(steps_per_period, event_tol, max_events_per_step)
         self.model = model
         self.period = excitation_period(model) if period is None else float(period)
+        self._explicit_period = period is not None
+        self._check_stability = bool(check_stability)
         self.steps_per_period = int(steps_per_period)
         self.event_tol = float(event_tol)
         self.max_events_per_step = int(max_events_per_step)
+
+    def _new_period(self, model: Model) -> float | None:
+        """``model``'s excitation period for a copy of this integrator, or None where the period was given."""
+        return None if self._explicit_period else excitation_period(model)
+
+    def _check_same_structure(self, model: Model) -> None:
+        """Raise :class:`StructureMismatch` unless ``model`` differs from this integrator's in parameter values only."""
+        if model.structure_key() != self.model.structure_key():
+            raise StructureMismatch("with_parameters needs a model of the same structure "
+                                    "(only parameter values may differ)")
 
     @property
     def state_names(self) -> list[str]:
@@ -250,9 +263,7 @@ class HybridIntegrator(Integrator):
     def __init__(self, model: Model, *, steps_per_period: int = 1000, event_tol: float = 1e-10,
                  max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
                  check_stability: bool = True, event_location: str = "bisection", method: str = "rk4"):
-        self._settings(model, steps_per_period, event_tol, max_events_per_step, period)
-        self._explicit_period = period is not None
-        self._check_stability = check_stability
+        self._settings(model, steps_per_period, event_tol, max_events_per_step, period, check_stability)
         self.event_location = check_event_location(event_location)
         self.method = get_method(method)
         # classical RK4 runs fused (an empty tableau); another method steps by its tableau
@@ -299,11 +310,8 @@ class HybridIntegrator(Integrator):
         StepTooLargeError
             If the step is unstable with the new parameters.
         """
-        if model.structure_key() != self.model.structure_key():
-            raise StructureMismatch("with_parameters needs a model of the same structure "
-                                    "(only parameter values may differ)")
-        new = self.with_parameter_values([model.parameters[n] for n in self.meta["params"]],
-                                         None if self._explicit_period else excitation_period(model))
+        self._check_same_structure(model)
+        new = self.with_parameter_values([model.parameters[n] for n in self.meta["params"]], self._new_period(model))
         new.model = model
         return new
 
@@ -336,8 +344,7 @@ class HybridIntegrator(Integrator):
         new.p = self.module.derived(p_raw.tolist())   # Python floats: the generated formulas run twice as fast
         if period is not None and not self._explicit_period:
             new.period = float(period)
-        new._g = np.empty_like(self._g)
-        new._ytmp = np.empty_like(self._ytmp)
+        new._own_work_arrays()
         if self._check_stability:
             # the step itself inside the stability region in every mode settles it; the limit
             # (a bisection on each eigenvalue's ray) is only needed for the error message

@@ -14,7 +14,7 @@ from ..numeric.contract import C_EVENTS, C_LOGGED, N_COUNTERS
 #: How a :class:`PeriodMap` differentiates: ``"auto"`` (the tangent where the kernel has one, else
 #: differences), ``"tangent"`` (variational equations and saltation matrices, or an error),
 #: ``"differences"`` (central differences of the map, ``2 n`` integrations) or ``"forward"``
-#: (forward differences, ``n + 1`` integrations, an error of about the step).
+#: (forward differences from ``P(y)``, ``n`` integrations more, an error of about the step).
 JACOBIAN_METHODS = ("auto", "tangent", "differences", "forward")
 
 
@@ -247,7 +247,8 @@ class PeriodMap:
         """``dP/dy`` by differences, column ``i`` with step ``rel_step * scale[i]`` (see :meth:`jacobian`).
 
         Central differences (``2 n`` integrations), or forward ones from ``P(y)`` where
-        the map was made with ``jacobian="forward"`` (``n + 1``). The first column is
+        the map was made with ``jacobian="forward"`` (``n``, and ``P(y)`` from the kept
+        run where the residual at ``y`` was just evaluated). The first column is
         timed; if it took at least :attr:`thread_column_seconds`, the others are shared
         among ``workers`` threads, each integrating with its own copy of the integrator
         (:meth:`~blademodel.numeric.integrator.Integrator.worker`). The result does not
@@ -255,7 +256,7 @@ class PeriodMap:
         """
         y = np.asarray(y, dtype=float)
         J = np.empty((self.n, self.n))
-        base = _plain_map(self.integrator, self.periods, y, mode) if self.method == "forward" else None
+        base = self(y, mode)[0] if self.method == "forward" else None   # counted by run()
         stop = threading.Event()
 
         def columns(ig, cols):
@@ -287,7 +288,7 @@ class PeriodMap:
                         job.result()   # re-raises a worker's FlowError here
                 finally:
                     stop.set()   # after an error or a Ctrl-C the other threads end at their next column
-        self.evaluations += self.n + 1 if base is not None else 2 * self.n
+        self.evaluations += self.n if base is not None else 2 * self.n
         return J
 
 
