@@ -94,6 +94,9 @@ class Branch:
         First harmonic (of the excitation) of each state.
     events : ndarray of int
         Events per orbit (over ``periods`` excitation periods).
+    residuals : ndarray, shape (points,)
+        Each orbit's scaled residual ``max |P(y) - y| / scale`` in the mode it is recorded
+        in (at most ``tol``; the scale is each state's excursion on the branch).
     sections : ndarray, shape (points, periods, states)
         The states at ``t = k T``, ``k = 0 .. periods - 1``: the orbit's Poincare samples
         (a period-2 orbit has two; a bifurcation diagram draws them all).
@@ -112,6 +115,7 @@ class Branch:
     amplitudes: np.ndarray
     harmonics: np.ndarray
     events: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    residuals: np.ndarray = field(default_factory=lambda: np.zeros(0))
     sections: np.ndarray = field(default_factory=lambda: np.zeros((0, 1, 0)))
     special: list = field(default_factory=list)
     state_names: list = field(default_factory=list)
@@ -430,6 +434,15 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
         else:
             T_new = _tangent(A_new, T)
         new = ctx.point(X_new, m_new, A_new)
+        if new["residual"] > ctx.tol:
+            # a correction that returned a state that is not an orbit in the mode it is recorded in
+            # (a guard, not expected to fire: the correctors check the mode the orbit comes back to)
+            ctx.why = f"the corrected point's residual {new['residual']:.3g} exceeds tol"
+            h /= 2
+            if h < ds_min:
+                message = f"the step fell below ds_min = {ds_min:g} at {name} = {X[-1] * span:.6g}: {ctx.why}"
+                break
+            continue
         new["regular"] = not secant
         found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
         if not jumped and h / 2 >= ds_min and any(_off_circle(q) for q in found):
@@ -461,6 +474,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
                   stable=np.array([p["stable"] for p in pts], dtype=bool),
                   amplitudes=np.array([p["amp"] for p in pts]), harmonics=np.array([p["h1"] for p in pts]),
                   events=np.array([p["events"] for p in pts], dtype=np.int64),
+                  residuals=np.array([p["residual"] for p in pts]),
                   sections=np.array([p["sections"] for p in pts]), special=special, state_names=list(ig.meta["state"][:n]),
                   message=message)
 
@@ -500,17 +514,15 @@ class _Context:
         Without ``jacobian`` the point's Jacobian is not taken (None), and ``self.events``
         holds its orbit's events.
         """
-        from .shooting import ShootingError, _newton
+        from .shooting import ShootingError, _shoot
         lam = X[-1] * self.span
         try:
             P = self.fam.map_at(lam)
-            y, mode_end = _newton(P, X[:-1] * self.scale, mode, self.scale, self.tol, self.max_corrections,
-                                  self.rel_step, [])
+            y, mode = _shoot(P, X[:-1] * self.scale, _copy(mode), self.scale, self.tol, self.max_corrections,
+                             self.rel_step, [])
         except (ShootingError, FlowError, np.linalg.LinAlgError, ValueError) as e:
             self.why = f"{self.why}; shooting at {self.fam.name} = {lam:.6g}: {e}"
             return None, mode, None
-        if not _same(mode_end, mode):
-            mode = _copy(mode_end)
         Xc = np.append(y / self.scale, X[-1])
         self.iterations = self.max_corrections // 2
         if not jacobian:
@@ -702,13 +714,14 @@ class _Context:
         y = X[:-1] * self.scale
         r = P.run(y, mode)
         Y = r.Y
+        residual = float(np.max(np.abs(r.end[:self.n] - y) / self.scale))
         amp = 0.5 * (Y.max(axis=0) - Y.min(axis=0))
         c = _fourier_row(Y.shape[0] - 1, self.fam.periods) @ Y[:-1] * 2.0 / (Y.shape[0] - 1)
         S = P.integrator.steps_per_period
         n = self.n
         return {"param": lam, "state": y, "sections": Y[:-1:S].copy(), "mu": mu, "stable": bool(np.max(np.abs(mu)) < 1.0), "amp": amp,
                 "h1": c, "unstable": _unstable_count(mu), "X": X.copy(), "mode": _copy(mode), "A": A, "Y": Y,
-                "events": r.events, "regular": True,
+                "events": r.events, "regular": True, "residual": residual,
                 # the Jacobian in physical units (the scale changes from point to point)
                 "J": A[:, :n] * self.scale[:, None] / self.scale[None, :] + np.eye(n),
                 "dl": A[:, n] * self.scale / self.span}

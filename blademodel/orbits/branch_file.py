@@ -84,6 +84,9 @@ def save_branch(branch: Branch, path, config=None) -> None:
         v = ds.createVariable("events", "i8", ("point",))
         v[:] = branch.events
         v.long_name = "events per orbit"
+        v = ds.createVariable("residual", "f8", ("point",))
+        v[:] = branch.residuals
+        v.long_name = "scaled residual max |P(y) - y| / scale of the orbit"
         v = ds.createVariable("stable", "i1", ("point",))
         v[:] = branch.stable.astype(np.int8)
         v.long_name = "1: every multiplier inside the unit circle"
@@ -132,6 +135,7 @@ def load_branch(path) -> Branch:
                       states=ds["section_state"][:].data.copy(), multipliers=mu,
                       stable=ds["stable"][:].data.astype(bool), amplitudes=ds["amplitude"][:].data.copy(),
                       events=ds["events"][:].data.copy(),
+                      residuals=ds["residual"][:].data.copy() if "residual" in ds.variables else np.zeros(0),
                       sections=ds["section_samples"][:].data.copy() if "section_samples" in ds.variables
                       else ds["section_state"][:].data[:, None, :].copy(),
                       harmonics=ds["harmonic1_abs"][:].data * np.exp(1j * ds["harmonic1_phase"][:].data),

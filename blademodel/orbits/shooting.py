@@ -180,16 +180,7 @@ def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, trans
     scale = _state_scale(_orbit_samples(ig, y, mode, periods)[1], n_q)
 
     history = []
-    for _ in range(3):
-        y, mode_end = _newton(P, y, mode, scale, tol, max_iter, rel_step, history)
-        if _same(mode_end, mode):
-            break
-        # converged in a mode the orbit does not come back to (the section state lies on a
-        # switching boundary of the guess's mode): start again in the mode it does come back to
-        mode = _copy(mode_end)
-    else:
-        raise ShootingError(f"the orbit does not come back to its mode at the section (mode {mode!r} -> "
-                            f"{mode_end!r}): it switches exactly there", history, y)
+    y, mode = _shoot(P, y, mode, scale, tol, max_iter, rel_step, history)
     J = P.jacobian(y, mode, scale, rel_step)
     mu = np.linalg.eigvals(J)
     mu = mu[np.argsort(-np.abs(mu), kind="stable")]
@@ -197,6 +188,23 @@ def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, trans
     return PeriodicOrbit(state=y, mode=_copy(mode), periods=int(periods), period=ig.period, monodromy=J,
                          multipliers=mu, residual=history[-1], history=history,
                          state_names=list(ig.meta["state"][:n]), scale=scale, t=t_orbit, y=y_orbit)
+
+
+def _shoot(P, y, mode, scale, tol, max_iter, rel_step, history):
+    """Newton's method (:func:`_newton`) until the orbit also comes back to the mode it starts in.
+
+    Converged in a mode the orbit does not come back to (the section state lies on a
+    switching boundary of the guess's mode, ``P(y) = y`` but the mode at ``t = T`` is
+    another), the state is not an orbit of the hybrid system in the mode it ends in:
+    solved again from that mode, at most three times. Returns ``(y, mode)``.
+    """
+    for _ in range(3):
+        y, mode_end = _newton(P, y, mode, scale, tol, max_iter, rel_step, history)
+        if _same(mode_end, mode):
+            return y, mode
+        mode = _copy(mode_end)
+    raise ShootingError(f"the orbit does not come back to its mode at the section (mode {mode!r} -> "
+                        f"{mode_end!r}): it switches exactly there", history, y)
 
 
 def _newton(P, y, mode, scale, tol, max_iter, rel_step, history):
