@@ -1,6 +1,6 @@
 """Scaling to bladed disks: cold set-up, warm per-step cost and memory against the number of contacts.
 
-    python benchmarks/scale.py [--full] [--repeats 3] [--skip-cold] [--skip-warm]
+    python benchmarks/scale.py [--full] [--repeats 7] [--skip-cold] [--skip-warm] [--reuse-cold]
 
 Models: ``BladedDisk(blades=N, friction=law, engine_order=1).build()``, a ring of N
 2-DOF blades with N shroud contacts (run by the per-contact kernel,
@@ -59,8 +59,9 @@ per period, ``event_tol = 1e-10``.
    EO = N/2 rings with their contacts open, gap 1 m, no events) and what its events
    add, per event: where the events per contact change with N (engine order 1),
    "linear in the contacts" means both are flat across N, not the sum. Each timed run
-   is a whole multiple of 20 periods lasting at least ``MIN_RUN_S`` (0.25 s): the
-   small rings' 20-period runs (15 ms) were within the shared machine's noise.
+   is a whole multiple of 20 periods lasting at least ``MIN_RUN_S`` (0.15 s): the
+   small rings' 20-period runs (15 ms) were within the shared machine's noise; seven
+   repeats, as three left one model's two measurements 1.4x apart.
 
 Takes about 12 min on the shared 2-core machine (cold part 6 min, 15 compiles;
 ``--full`` adds 9 more); ``--skip-cold`` / ``--skip-warm`` run one part (nothing written).
@@ -104,7 +105,7 @@ MISTUNING = 0.01
 OPEN = "disk EO=N/2, contacts open"
 #: A timed run lasts at least this long (whole multiples of PERIODS): a 20-period run of a small ring takes
 #: about 15 ms, where the shared machine's noise made one model's two measurements in one run differ by 1.4x.
-MIN_RUN_S = 0.25
+MIN_RUN_S = 0.15
 #: Warm series of disks, each evaluated against the flatness goal.
 SERIES = (("disk", "", "engine order 1"), (SYM, "_sym", "engine order N/2, tuned"),
           (MIS, "_mis", "engine order N/2, mistuned 1 %"))
@@ -212,6 +213,20 @@ def cold_part(ns, laws) -> list[dict]:
     return rows
 
 
+def _reused_cold(src, ns) -> list[dict] | None:
+    """The cold part of the last written run, if it measured these sources and these N (else None)."""
+    path = C.OUT / "scale.json"
+    if not path.exists():
+        return None
+    old = json.loads(path.read_text())
+    if old.get("sources_end", {}).get("digest") != src["digest"] or old["settings"]["n_cold"] != list(ns):
+        print("  --reuse-cold: the last run measured other sources or other N; measuring again", flush=True)
+        return None
+    print(f"  cold part reused from {path.name} (sources {src['digest']}, measured {old['machine']['date']})",
+          flush=True)
+    return old["cold"]
+
+
 def warm_part(ns, laws, repeats: int) -> tuple[list[dict], dict]:
     """Per-step thread CPU time with the cache warm, all cases interleaved."""
     from blademodel.config import BladedDisk
@@ -251,11 +266,11 @@ def warm_part(ns, laws, repeats: int) -> tuple[list[dict], dict]:
             c = np.zeros(N_COUNTERS, dtype=np.int64)
             st, _, _ = integ.advance(yy, m_T, TRANSIENT, TRANSIENT + periods, counters=c)
             return st, c
-        t0 = C.cpu_time()
+        c0 = C.cpu_time()
         st, cnt = run()
         if st:
             raise RuntimeError(f"{key}: timed interval failed with status {st}")
-        reps = max(1, int(np.ceil(MIN_RUN_S / max(C.cpu_time() - t0, 1e-6))))
+        reps = max(1, int(np.ceil(MIN_RUN_S / max(C.cpu_time() - c0, 1e-6))))
         if reps > 1:
             run = functools.partial(run, periods=reps * PERIODS)
             st, cnt = run()
@@ -298,7 +313,9 @@ def _event_costs(rows):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--full", action="store_true", help="cold set-up for every N (2 ... 96), not only 2, 8, 32, 96")
-    ap.add_argument("--repeats", type=int, default=3, help="interleaved repeats of the warm part")
+    ap.add_argument("--repeats", type=int, default=7, help="interleaved repeats of the warm part")
+    ap.add_argument("--reuse-cold", action="store_true",
+                    help="take the cold part from docs/benchmarks/scale.json if it was measured on these sources")
     ap.add_argument("--skip-cold", action="store_true", help="only the warm part (no JSON/PNG written)")
     ap.add_argument("--skip-warm", action="store_true", help="only the cold part (no JSON/PNG written)")
     args = ap.parse_args(argv)
@@ -308,7 +325,8 @@ def main(argv=None):
     print(f"blademodel sources {src0['digest']}" + (f", commit {src0['commit'][:10]}" if src0["commit"] else "")
           + (f", uncommitted: {' '.join(x.split()[-1] for x in src0['dirty'])}" if src0["dirty"] else ""), flush=True)
     ns_cold = N_ALL if args.full else N_COLD
-    cold = [] if args.skip_cold else cold_part(ns_cold, LAWS)
+    reused = _reused_cold(src0, ns_cold) if args.reuse_cold and not args.skip_cold else None
+    cold = [] if args.skip_cold else reused or cold_part(ns_cold, LAWS)
     t_cold = time.time() - t_start
     warm, wmeta = ([], {}) if args.skip_warm else warm_part(N_ALL, LAWS, args.repeats)
     la = C.print_load("at end")
@@ -415,7 +433,7 @@ def main(argv=None):
                                               "periods": PERIODS, "repeats": args.repeats, "full": args.full,
                                               "engine_order": [1, "N/2"], "mistuning_std": MISTUNING, "n_cold": list(ns_cold), "n_warm": list(N_ALL)},
            "sources_start": src0, "sources_end": src1, "cold": cold, "warm": warm, "goals": goals, "warm_meta": wmeta, "machine": C.machine(), "load_end": la,
-           "cold_elapsed_s": t_cold, "elapsed_s": time.time() - t_start}
+           "cold_elapsed_s": t_cold, "cold_reused": reused is not None, "elapsed_s": time.time() - t_start}
     path = C.write_json("scale", out)
     plot(cold, warm, path.with_suffix(".png"))
     print(f"\nwrote {path} and {path.with_suffix('.png').name}  ({time.time() - t_start:.0f} s)")
