@@ -341,3 +341,47 @@ def test_a_branch_plot_overlaid_on_a_sweep(tmp_path, capsys):
     assert main(["continue", yaml, "--param", "F0", "--from", "50", "--to", "60", "--plot", str(png),
                  "--overlay", str(nc)]) == 2
     assert "did not vary 'F0'" in capsys.readouterr().err
+
+
+def test_the_coulomb_pair_turns_at_a_nonsmooth_fold_and_back_at_a_smooth_one():
+    """Near 420.68 rad/s the Coulomb pair's stable branch (a brief stick every period: 12 events) turns back where
+    that stick vanishes, a grazing at which a multiplier jumps across the unit circle (0.53 to 1.07) instead of
+    crossing it: a nonsmooth fold. Its unstable arm (10 events) comes back to a smooth fold (a multiplier through
+    +1) near 420.35, and the upper stable branch goes on. (The continuation stalled at the nonsmooth fold until the
+    tangent after it was oriented away from the last point.) Checked by warm-started sweeps, 0.01 rad/s apart
+    across each fold: going up they follow the lower arm to the nonsmooth fold and the upper one after it; going
+    down the upper arm to the smooth fold and the lower one below it; each sample is on one arm (to 1e-3 of the
+    amplitude: linear interpolation between the branch's points, up to 0.8 rad/s apart on the upper arm; the arms
+    are 1 % apart)."""
+    cfg = BladePair(friction="coulomb")
+    b = continuation(cfg, "omega", 410.0, 430.0, ds=0.01, ds_max=0.05, workers=1)
+    assert b.message == "reached omega = 430"
+    (nf,), (fold,) = b.points("nonsmooth-fold"), b.points("fold")
+    assert abs(abs(nf.multiplier) - 1) > 0.05 and abs(abs(fold.multiplier) - 1) < 1e-3
+    assert 420.3 < fold.param < 420.4 < 420.6 < nf.param < 420.7
+    k_nf, k_f = nf.index, fold.index
+    lower, middle, upper = slice(0, k_nf + 1), slice(k_nf + 1, k_f + 1), slice(k_f + 1, None)
+    assert b.stable[lower].all() and not b.stable[middle].any() and b.stable[upper].all()
+    i = b.state_names.index("x1")
+    h = np.abs(b.harmonics[:, i])
+
+    def arm(part, w):
+        o = np.argsort(b.params[part])
+        return np.interp(w, b.params[part][o], h[part][o])
+
+    top = max(b.params[lower].max(), b.params[middle].max())   # the nonsmooth fold lies between the arms' ends
+    bottom = b.params[middle].min()
+    up_values = np.round(np.arange(420.60, top + 0.035, 0.01), 4)
+    down_values = np.round(np.arange(420.45, bottom - 0.035, -0.01), 4)
+    up = _sweep_amplitudes(cfg, [419.0, 420.0, 420.5, *up_values], periods=300)[3:]
+    down = _sweep_amplitudes(cfg, [422.0, 421.0, 420.6, *down_values], periods=300)[3:]
+    for values, amps in ((up_values, up), (down_values, down)):
+        on_lower = np.abs(amps - arm(lower, values)) < 1e-3 * amps
+        on_upper = np.abs(amps - arm(upper, values)) < 1e-3 * amps
+        assert np.all(on_lower ^ on_upper)
+        switch = np.flatnonzero(on_lower != on_lower[0])[0]
+        assert np.all(on_lower[:switch] == on_lower[0]) and np.all(on_lower[switch:] != on_lower[0])
+        if values is up_values:   # up: the lower arm up to the top of the fold, then the upper one
+            assert on_lower[0] and values[switch - 1] <= top + 1e-9 and values[switch] >= b.params[lower].max()
+        else:                     # down: the upper arm down to the smooth fold, then the lower one
+            assert on_upper[0] and values[switch - 1] >= fold.param - 1e-3 and values[switch] <= fold.param + 1e-3

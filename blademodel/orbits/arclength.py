@@ -51,7 +51,10 @@ class SpecialPoint:
     ----------
     kind : str
         ``"fold"``, ``"period-doubling"``, ``"neimark-sacker"`` or ``"grazing"`` (the number
-        of events per orbit changes: a guard of the orbit touches zero).
+        of events per orbit changes: a guard of the orbit touches zero), or
+        ``"nonsmooth-fold"``: the branch turns back at a kink of the map (a grazing), its
+        stability changing with no multiplier on the unit circle (one jumps across it);
+        located only to within the last step across the kink.
     param : float
         The field's value there (located to ``locate_tol`` of the range).
     state : ndarray
@@ -429,10 +432,6 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
                 break
             h /= 2
             continue
-        if secant:   # the difference quotients there may straddle the kink: the secant is the tangent
-            T_new = (X_new - X) / np.linalg.norm(X_new - X)
-        else:
-            T_new = _tangent(A_new, T)
         new = ctx.point(X_new, m_new, A_new)
         if new["residual"] > ctx.tol:
             # a correction that returned a state that is not an orbit in the mode it is recorded in
@@ -445,12 +444,26 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
             continue
         new["regular"] = not secant
         found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
-        if not jumped and h / 2 >= ds_min and any(_off_circle(q) for q in found):
+        off_circle = any(_off_circle(q) for q in found)
+        if not jumped and h / 2 >= ds_min and off_circle:
             # the stability changed, but no multiplier lies on the unit circle where the change is
             # located: the correction landed on another arm of the branch (measured on the bilinear
             # pair's period-2 branch, from an unstable arm to a stable one); a shorter step
             h /= 2
             continue
+        if secant:   # the difference quotients there may straddle the kink: the secant is the tangent
+            T_new = (X_new - X) / np.linalg.norm(X_new - X)
+        elif jumped or off_circle:
+            # even the shortest step (or a jump across a kink) changed the stability with no
+            # multiplier on the circle: the arm that comes back from a nonsmooth fold (a grazing
+            # where the branch turns: the Coulomb pair at 420.684 rad/s), whose tangent opposes
+            # the last one, so orienting it by that one would lead back into the fold. Onward is
+            # away from the last point.
+            T_new = _tangent(A_new, X_new - X)
+        else:
+            T_new = _tangent(A_new, T)
+        if off_circle and T_new[-1] * T[-1] < 0:
+            found = [_nonsmooth_fold(q) if _off_circle(q) else q for q in found]
         jumped = False
         special += found
         pts.append(new)
@@ -874,6 +887,12 @@ def _fourier_row(m: int, k: int) -> np.ndarray:
     if (m, k) not in _FOURIER:
         _FOURIER[(m, k)] = np.exp(-2j * np.pi * k * np.arange(m) / m)
     return _FOURIER[(m, k)]
+
+
+def _nonsmooth_fold(p: SpecialPoint) -> SpecialPoint:
+    """A stability change with no multiplier on the circle where the branch turns back: a nonsmooth fold."""
+    return SpecialPoint(kind="nonsmooth-fold", param=p.param, state=p.state, multiplier=p.multiplier,
+                        index=p.index, mode=p.mode)
 
 
 def _off_circle(p: SpecialPoint) -> bool:
