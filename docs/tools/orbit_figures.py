@@ -1,7 +1,8 @@
 """Figures of the periodic-orbits page: the pair's FRFs, its period-doubled branch, a bladed disk's FRF.
 
 Run from the repository root: ``python docs/tools/orbit_figures.py [--only NAME]``. Writes
-``docs/figures/frf_pair.png``, ``period_doubling_bilinear.png`` and ``frf_bladed_disk.png`` and
+``docs/figures/frf_pair.png``, ``period_doubling_bilinear.png``, ``nonsmooth_fold_coulomb.png`` and
+``frf_bladed_disk.png`` and
 prints what each branch found.
 """
 
@@ -36,9 +37,8 @@ def _report(label, b, t):
 def frf_pair():
     """Both laws, omega from 225 to 405 rad/s (the paper's 290 inside).
 
-    Both branches reach 200 rad/s; above, the bilinear one reaches 430 rad/s and the Coulomb
-    one stops at a fold at 420.683 rad/s (its corrections stall at a scaled residual of 3e-5
-    and the step falls below ``ds_min``); docs/orbits.md.
+    Both branches reach 200 rad/s and 430 rad/s (the Coulomb one through a nonsmooth fold at
+    420.684 rad/s: ``nonsmooth_fold``); docs/orbits.md.
     """
     fig = Figure(figsize=(9, 3.6))
     for j, law in enumerate(("coulomb", "bilinear")):
@@ -66,6 +66,50 @@ def period_doubling():
     branch_figure([b1, b2], "x1", quantity="section").savefig(OUT / "period_doubling_bilinear.png", dpi=110)
 
 
+def _warm_sweep(cfg, values, periods=300):
+    """First-harmonic amplitude of x1 at each value, each from the last one's state (the first from rest)."""
+    from blademodel.numeric import make_integrator
+    ig0, y, mode, out = make_integrator(cfg.build()), None, None, []
+    for w in values:
+        ig = ig0.with_parameters(apply_overrides(cfg, {"omega": float(w)}).build())
+        if y is None:
+            y = ig.initial_state()
+            mode = ig.mode_of(y)
+        status, mode, _ = ig.advance(y, mode, 0, periods)
+        rec = ig.record_buffer(ig.steps_per_period + 1)
+        ig.advance(y.copy(), mode, 0, 1, n_transient=0, record=rec)
+        x = rec[1][:-1, 0]
+        out.append(abs(2 * np.fft.rfft(x)[1] / x.size))
+    return np.array(out)
+
+
+def nonsmooth_fold():
+    """The Coulomb pair from 410 to 430 rad/s: a nonsmooth fold at 420.684, a smooth one at 420.350, and warm
+    sweeps up and down (0.01 rad/s apart, 300 periods a value) across both."""
+    cfg = BladePair(friction="coulomb")
+    t = time.process_time()
+    b = continuation(cfg, "omega", 410.0, 430.0, ds=0.002, ds_max=0.002, max_points=3000, workers=1)
+    _report("pair, coulomb, 410-430", b, t)
+    up_w = np.round(np.arange(420.20, 420.80, 0.01), 4)
+    down_w = up_w[::-1]
+    up = _warm_sweep(cfg, [419.0, 420.0, *up_w])[2:]
+    down = _warm_sweep(cfg, [422.0, 421.0, *down_w])[2:]
+    fig = Figure(figsize=(7, 4.2))
+    ax = fig.add_subplot()
+    branch_figure(b, "x1", ax=ax)
+    ax.plot(up_w, up * 1, "^", color="C3", ms=4, mfc="none", label="warm sweep, up")
+    ax.plot(down_w, down * 1, "v", color="C2", ms=4, mfc="none", label="warm sweep, down")
+    ax.set_xlim(420.15, 420.85)
+    inside = (b.params > 420.15) & (b.params < 420.85)
+    hh = np.abs(b.harmonics[inside, b.state_names.index("x1")])
+    ax.set_ylim(hh.min() * 0.998, hh.max() * 1.002)
+    ax.legend(fontsize=7)
+    ax.set_title("blade pair, Coulomb: a nonsmooth fold (a grazing, right) and a smooth fold (left)", fontsize=9)
+    ax.set_xlabel("ω (rad/s)")
+    fig.tight_layout()
+    fig.savefig(OUT / "nonsmooth_fold_coulomb.png", dpi=110)
+
+
 def frf_bladed_disk():
     """The 24-blade tuned Coulomb ring (engine order 3) in omega from 280 to 292 rad/s (difference Jacobians)."""
     cfg = apply_overrides(load_config("models/bladed_disk_24.yaml"), {"blades": "24"})
@@ -82,9 +126,9 @@ def frf_bladed_disk():
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--only", choices=("frf_pair", "period_doubling", "frf_bladed_disk"))
+    ap.add_argument("--only", choices=("frf_pair", "period_doubling", "nonsmooth_fold", "frf_bladed_disk"))
     args = ap.parse_args()
-    for name in ("frf_pair", "period_doubling", "frf_bladed_disk"):
+    for name in ("frf_pair", "period_doubling", "nonsmooth_fold", "frf_bladed_disk"):
         if args.only in (None, name):
             globals()[name]()
 
