@@ -385,3 +385,22 @@ def test_the_coulomb_pair_turns_at_a_nonsmooth_fold_and_back_at_a_smooth_one():
             assert on_lower[0] and values[switch - 1] <= top + 1e-9 and values[switch] >= b.params[lower].max()
         else:                     # down: the upper arm down to the smooth fold, then the lower one
             assert on_upper[0] and values[switch - 1] >= fold.param - 1e-3 and values[switch] <= fold.param + 1e-3
+
+
+def test_the_coulomb_pair_crosses_a_kink_where_the_arclength_corrections_fail():
+    """Near 164.914 rad/s a stick phase of the Coulomb pair's orbit appears (a multiplier jumps from 0.175 to
+    0.068): the arclength corrections fail at every step length there, and the branch used to stop. Shooting at
+    values of the field just past the last point, from its orbit, converges; the branch goes on, rising in omega
+    throughout (it once turned back: the tangent from difference quotients that straddle the kink pointed back),
+    and its points across the kink are the orbits shooting finds after integrations from rest."""
+    cfg = BladePair(friction="coulomb")
+    # the range's span sets the steps (a range of 25 rad/s happens to step over the kink)
+    b = continuation(cfg, "omega", 150.0, 600.0, max_points=130, workers=1)
+    assert b.params[-1] > 166.0 and np.all(np.diff(b.params) > 0)
+    assert np.all(b.residuals <= 1e-10) and b.stable.all()
+    near = np.flatnonzero(np.abs(b.params - 164.914) < 0.1)
+    assert b.params[near].min() < 164.9139 and b.params[near].max() > 164.915
+    for k in near[::3]:
+        m = type(cfg).model_validate({**cfg.model_dump(), "omega": b.params[k]}).build()
+        o = find_periodic_orbit(m, transient=300)
+        assert np.max(np.abs(o.state - b.states[k]) / o.scale) < 1e-8

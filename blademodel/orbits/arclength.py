@@ -406,7 +406,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
     special: list = []
     h = ds
     message = f"left [{lo:g}, {hi:g}] in {name}"
-    jumped = False
+    jumped = ahead = False
     while len(pts) < max_points:
         X_pred, A_pred = ctx.predict(pts, X, T, A, h)
         X_new, m_new, A_new = ctx.correct(X_pred, T, m, A_pred)
@@ -416,6 +416,17 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
             # time passing the section); away from folds, shooting at the predicted value does not
             X_new, m_new, A_new = ctx.correct_at_value(X + h * T, m)
             secant = X_new is not None
+        if X_new is None and h / 2 < ds_min and not ahead and len(pts) > 1:
+            # the arclength corrections fail at every step length just before a kink of the map (a
+            # stick phase that appears or vanishes): shooting at values of the field just past it,
+            # from the last orbit, converges (the Coulomb pair at 164.915 rad/s, in 2 to 5 steps).
+            # The way on is the secant's (the tangent from difference quotients that straddle the
+            # kink can point anywhere: there its field component was -0.003 on a rising branch)
+            ahead = True
+            travel = X - np.append(pts[-2]["state"] / ctx.scale, pts[-2]["param"] / span)
+            if abs(travel[-1]) > 1e-3 * np.linalg.norm(travel):
+                X_new, m_new, A_new = _shoot_ahead(ctx, X, np.sign(travel[-1]), m)
+                secant = X_new is not None
         if X_new is None:
             if h / 2 < ds_min:
                 if not jumped and len(pts) > 1:
@@ -462,6 +473,9 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
             T_new = _tangent(A_new, X_new - X)
         else:
             T_new = _tangent(A_new, T)
+        if secant and ahead:
+            h = max(h, 4 * ds_min)   # past the kink: steps grow again from there
+        ahead = False
         if off_circle and T_new[-1] * T[-1] < 0:
             found = [_nonsmooth_fold(q) if _off_circle(q) else q for q in found]
         jumped = False
@@ -490,6 +504,19 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
                   residuals=np.array([p["residual"] for p in pts]),
                   sections=np.array([p["sections"] for p in pts]), special=special, state_names=list(ig.meta["state"][:n]),
                   message=message)
+
+
+def _shoot_ahead(ctx, X, direction, mode, fractions=(1e-6, 1e-5, 1e-4, 1e-3)):
+    """Shooting at the field's values a little past the last point ``X`` (``direction`` +1 or -1 in the field),
+    from the last orbit: the first that converges (its unknowns, mode and Jacobian), else ``(None, mode, None)``.
+    ``fractions`` are of the range (the field's scaled unit)."""
+    for frac in fractions:
+        Xv = X.copy()
+        Xv[-1] += direction * frac
+        X_new, m_new, A_new = ctx.correct_at_value(Xv, mode)
+        if X_new is not None:
+            return X_new, m_new, A_new
+    return None, mode, None
 
 
 def _tangent(A, previous):
