@@ -404,3 +404,19 @@ def test_the_coulomb_pair_crosses_a_kink_where_the_arclength_corrections_fail():
         m = type(cfg).model_validate({**cfg.model_dump(), "omega": b.params[k]}).build()
         o = find_periodic_orbit(m, transient=300)
         assert np.max(np.abs(o.state - b.states[k]) / o.scale) < 1e-8
+
+
+def test_the_bilinear_pair_turns_back_only_at_its_folds():
+    """Down from 600 to 150 rad/s the bilinear pair's branch turns back in omega eight times, each at a located
+    fold (a real multiplier through +1) within a step of it. At a kink near 154.267 rad/s (difference quotients
+    straddling it) the tangent oriented by its dot product with the last one kept the state's way and reversed
+    omega's, and the branch walked back up over itself to 160.95 and down again, 3000 points without end; the
+    tangent now keeps the sign of det([A; T]), the branch's orientation, which only a fold changes with it."""
+    b = continuation(BladePair(friction="bilinear"), "omega", 600.0, 150.0, max_points=3000, workers=1)
+    assert b.message == "reached omega = 150" and np.all(b.residuals <= 1e-10)
+    d = np.sign(np.diff(b.params))
+    turns = b.params[np.flatnonzero(d[1:] != d[:-1]) + 1]
+    folds = np.array(sorted(p.param for p in b.special if p.kind in ("fold", "nonsmooth-fold")))
+    assert len(turns) == len(folds) == 8
+    assert all(np.min(np.abs(folds - w)) < 0.2 for w in turns)
+    assert np.min(np.abs(folds - 398.3718)) < 1e-3 and np.min(np.abs(folds - 398.4672)) < 1e-3

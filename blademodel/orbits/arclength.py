@@ -473,6 +473,8 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
             T_new = _tangent(A_new, X_new - X)
         else:
             T_new = _tangent(A_new, T)
+            if A is not None and T_new[-1] * T[-1] < 0:
+                T_new = _oriented(T_new, A_new, A, T)
         if secant and ahead:
             h = max(h, 4 * ds_min)   # past the kink: steps grow again from there
         ahead = False
@@ -527,6 +529,20 @@ def _tangent(A, previous):
     t = np.linalg.solve(M, rhs)
     t /= np.linalg.norm(t)
     return t if np.dot(t, previous) >= 0 else -t
+
+
+def _oriented(T_new, A_new, A, T):
+    """``T_new`` or ``-T_new``: the one with ``det([A_new; T_new])`` of the sign of ``det([A; T])``.
+
+    The sign of that determinant is the branch's orientation (it does not change at a fold,
+    where the field turns back, nor under the state scaling). Orienting by ``T_new . T > 0``
+    instead fails where the tangent turns sharply: at a kink of the map, whose difference
+    quotients straddle it, the new tangent kept the state's way and reversed the field's (the
+    bilinear pair at 154.267 rad/s, going down: the branch then went back up over itself).
+    """
+    s_old = np.linalg.slogdet(np.vstack([A, T]))[0]
+    s_new = np.linalg.slogdet(np.vstack([A_new, T_new]))[0]
+    return T_new if s_old * s_new >= 0 else -T_new
 
 
 #: Halvings of a correction step whose residual did not fall, before the step is taken as it is.
