@@ -27,6 +27,18 @@ def add_stepping_arguments(parser: argparse.ArgumentParser) -> None:
                         help="event bracket, as a fraction of the step (default 1e-10)")
 
 
+def add_jacobian_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add ``--jacobian`` and ``--workers`` (how the period map is differentiated, and in how many threads)."""
+    from ..orbits.period_map import JACOBIAN_METHODS
+    parser.add_argument("--jacobian", choices=JACOBIAN_METHODS, default="auto",
+                        help="how the period map is differentiated: auto (the tangent of the flow, or central "
+                             "differences on bladed disks), tangent, differences (central), forward (half the "
+                             "integrations of central differences, multipliers to about 1e-6)")
+    parser.add_argument("--workers", type=int, default=None, metavar="N",
+                        help="threads for Jacobians by differences, as on bladed disks (default: all cores; the "
+                             "result is the same whatever N)")
+
+
 def check_at_least_one(args: argparse.Namespace, names) -> None:
     """``ValueError`` naming the first option of ``names`` (attribute names) below 1."""
     for name in names:

@@ -10,7 +10,8 @@ import numpy as np
 from ..orbits import FlowError, ShootingError, continuation, period_doubled_branch
 from ..progress import Progress
 from . import jsonout
-from .common import add_model_arguments, add_stepping_arguments, check_at_least_one, config_and_model
+from .common import (add_jacobian_arguments, add_model_arguments, add_stepping_arguments, check_at_least_one,
+                     config_and_model)
 from .output import check_output_file
 
 
@@ -43,13 +44,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--state", default=None, help="state plotted and reported (default: the first coordinate)")
     p.add_argument("--out", metavar="FILE.nc", help="write the branch (NetCDF)")
     p.add_argument("--plot", metavar="FILE.png", help="draw the branch (stable solid, unstable dashed)")
-    p.add_argument("--jacobian", choices=("auto", "tangent", "differences", "forward"), default="auto",
-                   help="how the period map is differentiated: auto (the tangent of the flow, or central "
-                        "differences on bladed disks), tangent, differences (central), forward (half the "
-                        "integrations of central differences, multipliers to about 1e-6)")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="threads for Jacobians by differences, as on bladed disks (default: all cores; the "
-                        "branch is the same whatever N)")
+    add_jacobian_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=run)
     return p

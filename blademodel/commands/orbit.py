@@ -11,7 +11,8 @@ from ..numeric import SimulationError
 from ..numeric.kernels import make_integrator
 from ..orbits import FlowError, ShootingError, find_periodic_orbit
 from . import jsonout
-from .common import add_model_arguments, add_stepping_arguments, check_at_least_one, config_and_model
+from .common import (add_jacobian_arguments, add_model_arguments, add_stepping_arguments, check_at_least_one,
+                     config_and_model)
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -29,12 +30,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--tol", type=float, default=1e-10, help="scaled residual to reach (default 1e-10)")
     p.add_argument("--max-iter", type=int, default=30, metavar="K", help="Newton steps allowed (default 30)")
     add_stepping_arguments(p)
-    p.add_argument("--jacobian", choices=("auto", "tangent", "differences", "forward"), default="auto",
-                   help="how the period map is differentiated: auto (the tangent of the flow, or central "
-                        "differences on bladed disks), tangent, differences (central), forward (half the "
-                        "integrations of central differences, multipliers to about 1e-6)")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="threads for a Jacobian by differences, as on bladed disks (default: all cores)")
+    add_jacobian_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=run)
     return p

@@ -283,28 +283,12 @@ class ContactIntegrator(Integrator):
             h_max, which = self.max_stable_step()
             check_step(self.period, self.steps_per_period, h_max, which, self.method.name)
 
-    def with_parameters(self, model: Model) -> "ContactIntegrator":
-        """This integrator for ``model``, which differs from its own in parameter values only.
-
-        Nothing is generated or compiled: the copy packs ``model``'s values into
-        tables of its own (and takes its excitation period, unless the period was
-        given explicitly) and checks the step's stability again, from the modes'
-        Jacobians, whose eigenvalue limits are computed once for each set of them
-        and shared by every copy (the excitation frequency, say, moves none).
-        Continuation moves a parameter at every correction.
-
-        Raises
-        ------
-        StructureMismatch
-            If ``model`` has another structure (other components, laws or modes).
-        StepTooLargeError
-            If the step is unstable with the new parameters.
-        """
+    def _with_values_of(self, model: Model, period: float | None) -> "ContactIntegrator":
+        """The copy packs ``model``'s values into tables of its own and checks the step
+        from the modes' Jacobians, whose eigenvalue limits are computed once for each set
+        of them and shared by every copy (the excitation frequency, say, moves none)."""
         from .integrator import StructureMismatch
-        self._check_same_structure(model)
         new = copy.copy(self)
-        new.model = model
-        period = self._new_period(model)
         if period is not None:
             new.period = period
         offsets, pos = self._layout

@@ -169,7 +169,7 @@ def check_advance_arguments(integ: "Integrator", y, mode, start_period, end_peri
 
 
 class StructureMismatch(ValueError):
-    """A model given to :meth:`HybridIntegrator.with_parameters` differs in more than parameter values."""
+    """A model given to :meth:`Integrator.with_parameters` differs in more than parameter values."""
 
 
 class Integrator:
@@ -193,15 +193,30 @@ class Integrator:
         self.event_tol = float(event_tol)
         self.max_events_per_step = int(max_events_per_step)
 
-    def _new_period(self, model: Model) -> float | None:
-        """``model``'s excitation period for a copy of this integrator, or None where the period was given."""
-        return None if self._explicit_period else excitation_period(model)
+    def with_parameters(self, model: Model) -> "Integrator":
+        """This integrator for ``model``, which differs from its own in parameter values only.
 
-    def _check_same_structure(self, model: Model) -> None:
-        """Raise :class:`StructureMismatch` unless ``model`` differs from this integrator's in parameter values only."""
+        Nothing is generated or compiled: the copy takes ``model``'s parameter values
+        (and its excitation period, unless the period was given explicitly) and checks
+        the step's stability again. Continuation moves a parameter at every correction.
+
+        Raises
+        ------
+        StructureMismatch
+            If ``model`` has another structure (other components, laws or modes).
+        StepTooLargeError
+            If the step is unstable with the new parameters.
+        """
         if model.structure_key() != self.model.structure_key():
             raise StructureMismatch("with_parameters needs a model of the same structure "
                                     "(only parameter values may differ)")
+        new = self._with_values_of(model, None if self._explicit_period else excitation_period(model))
+        new.model = model
+        return new
+
+    def _with_values_of(self, model: Model, period: float | None) -> "Integrator":
+        """A copy with ``model``'s parameter values and ``period`` (None: this one's), stability checked."""
+        raise NotImplementedError
 
     @property
     def state_names(self) -> list[str]:
@@ -296,24 +311,8 @@ class HybridIntegrator(Integrator):
         self._g = np.empty_like(self._g)
         self._ytmp = np.empty_like(self._ytmp)
 
-    def with_parameters(self, model: Model) -> "HybridIntegrator":
-        """This integrator for ``model``, which differs from its own in parameter values only.
-
-        Nothing is generated or compiled: the copy takes ``model``'s parameters (and
-        its excitation period, unless the period was given explicitly) and checks the
-        step's stability again. Continuation moves a parameter at every correction.
-
-        Raises
-        ------
-        StructureMismatch
-            If ``model`` has another structure (other components, laws or modes).
-        StepTooLargeError
-            If the step is unstable with the new parameters.
-        """
-        self._check_same_structure(model)
-        new = self.with_parameter_values([model.parameters[n] for n in self.meta["params"]], self._new_period(model))
-        new.model = model
-        return new
+    def _with_values_of(self, model: Model, period: float | None) -> "HybridIntegrator":
+        return self.with_parameter_values([model.parameters[n] for n in self.meta["params"]], period)
 
     def with_parameter_values(self, p_raw, period: float | None = None) -> "HybridIntegrator":
         """This integrator with the raw parameter values ``p_raw`` (in ``meta["params"]`` order).

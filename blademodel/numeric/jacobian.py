@@ -19,7 +19,7 @@ def jacobians(system: HybridSystem) -> str:
     ``JACOBIAN_PARAMS`` holds the indices of the raw parameters that some mode's
     Jacobian depends on: a change of the others (the forcing's amplitude and
     frequency, a gap) leaves every mode's eigenvalues as they were, so the
-    stability check can reuse them (:meth:`~blademodel.numeric.integrator.HybridIntegrator.with_parameters`).
+    stability check can reuse them (:meth:`~blademodel.numeric.integrator.Integrator.with_parameters`).
     """
     state = system.state
     at_rest = {s: 0 for s in state}

@@ -214,14 +214,14 @@ class _Family:
 
     def _integrator_at(self, value: float):
         """An integrator at ``value``: the first one with the path's parameter values, its parameters taken from
-        the model built at ``value``, or (another structure, or a kernel that takes no new parameters) a new one."""
+        the model built at ``value``, or (another structure) a new one."""
         from ..numeric.integrator import StructureMismatch
         from ..numeric.kernels import make_integrator
         path = self.path()
         if path is not None and path.covers(value):
             return self._first.with_parameter_values(*path.at(value))
         model = self.config_at(value).build()
-        if self._first is not None and hasattr(self._first, "with_parameters"):
+        if self._first is not None:
             try:
                 return self._first.with_parameters(model)
             except StructureMismatch:

@@ -66,21 +66,18 @@ def period_doubling():
     branch_figure([b1, b2], "x1", quantity="section").savefig(OUT / "period_doubling_bilinear.png", dpi=110)
 
 
-def _warm_sweep(cfg, values, periods=300):
-    """First-harmonic amplitude of x1 at each value, each from the last one's state (the first from rest)."""
-    from blademodel.numeric import make_integrator
-    ig0, y, mode, out = make_integrator(cfg.build()), None, None, []
-    for w in values:
-        ig = ig0.with_parameters(apply_overrides(cfg, {"omega": float(w)}).build())
-        if y is None:
-            y = ig.initial_state()
-            mode = ig.mode_of(y)
-        status, mode, _ = ig.advance(y, mode, 0, periods)
-        rec = ig.record_buffer(ig.steps_per_period + 1)
-        ig.advance(y.copy(), mode, 0, 1, n_transient=0, record=rec)
-        x = rec[1][:-1, 0]
-        out.append(abs(2 * np.fft.rfft(x)[1] / x.size))
-    return np.array(out)
+def _warm_sweep(law, values, periods=300):
+    """First-harmonic amplitude of x1 at each value of omega by a warm-started sweep (``blademodel sweep`` with
+    ``warm_start``: each value from the last one's state, the first from rest), ``periods`` discarded."""
+    import tempfile
+
+    from blademodel.sweep import Study, open_result, run_study
+    study = Study(name="warm", base={"model": "blade_pair", "friction": law},
+                  sweep={"omega": {"values": [float(w) for w in values]}},
+                  run={"transient": periods, "periods": 2, "warm_start": True})
+    with tempfile.TemporaryDirectory() as tmp:
+        ds = open_result(run_study(study, Path(tmp) / "warm.nc", progress=None))
+        return ds["harmonic1"].sel(state="x1").values
 
 
 def nonsmooth_fold():
@@ -92,13 +89,13 @@ def nonsmooth_fold():
     _report("pair, coulomb, 410-430", b, t)
     up_w = np.round(np.arange(420.20, 420.80, 0.01), 4)
     down_w = up_w[::-1]
-    up = _warm_sweep(cfg, [419.0, 420.0, *up_w])[2:]
-    down = _warm_sweep(cfg, [422.0, 421.0, *down_w])[2:]
+    up = _warm_sweep("coulomb", [419.0, 420.0, *up_w])[2:]
+    down = _warm_sweep("coulomb", [422.0, 421.0, *down_w])[2:]
     fig = Figure(figsize=(7, 4.2))
     ax = fig.add_subplot()
     branch_figure(b, "x1", ax=ax)
-    ax.plot(up_w, up * 1, "^", color="C3", ms=4, mfc="none", label="warm sweep, up")
-    ax.plot(down_w, down * 1, "v", color="C2", ms=4, mfc="none", label="warm sweep, down")
+    ax.plot(up_w, up, "^", color="C3", ms=4, mfc="none", label="warm sweep, up")
+    ax.plot(down_w, down, "v", color="C2", ms=4, mfc="none", label="warm sweep, down")
     ax.set_xlim(420.15, 420.85)
     inside = (b.params > 420.15) & (b.params < 420.85)
     hh = np.abs(b.harmonics[inside, b.state_names.index("x1")])
