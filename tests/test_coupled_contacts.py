@@ -395,12 +395,15 @@ def test_a_slipping_contact_reverses_instead_of_sticking():
 # ---- 5. the Jenkins (bilinear) and Iwan laws never exceed their bound ---------------------------------
 @pytest.mark.parametrize("gap", ["-1e-4", "4e-5"])
 def test_bilinear_row_friction_force_never_exceeds_mu_n(gap):
-    """Both contacts bilinear: |f| <= mu N (1 + 1e-9) in every closed record.
+    """Both contacts bilinear: ``|f| - mu N`` at most ``1e-9`` of the contact's largest ``mu N`` in every closed record.
 
     ``event_tol = 1e-13``: the state is taken past a located root, so a slip phase
     starts with ``|kd z| - mu N`` equal to the guard's overshoot (about ``5e-12 N``
-    at the default ``1e-10``), which the records right after a closing, with
-    ``N ~ 1e-4 N``, see as a relative excess up to ``1.3e-7``.
+    at the default ``1e-10``). While slipping, the slider's stretch follows ``mu N /
+    kd`` through its rate, integrated by RK4: an absolute error (about ``1e-13 N``
+    measured, with the forcing read from the phase table or from sin and cos alike),
+    which a record with a small normal force sees as a large relative excess (``1.3e-9``
+    at ``N = 1.8e-4 N``), so the excess is bounded against the contact's force scale.
     """
     cfg = row_config({"contacts.0.friction": BILINEAR, "contacts.1.friction": BILINEAR, "Delta": gap,
                       "phi2": "2.0943951023931953", "phi3": "3.141592653589793"})
@@ -411,7 +414,7 @@ def test_bilinear_row_friction_force_never_exceeds_mu_n(gap):
         closed = c["modes"][:, j] != 0
         N, f = c["N"][closed, j], c["f"][closed, j]
         assert closed.sum() > 10000
-        assert np.all(np.abs(f) <= mu * N * (1 + 1e-9)), np.max(np.abs(f) / (mu * N))
+        assert np.all(np.abs(f) - mu * N <= 1e-9 * mu * N.max()), np.max(np.abs(f) - mu * N) / (mu * N.max())
         slip = np.isin(c["modes"][closed, j], [names.index("slip+"), names.index("slip-")])
         assert slip.sum() > 1000   # the bound is reached, not just respected from afar
         np.testing.assert_allclose(np.abs(f[slip]), mu * N[slip], rtol=1e-8)

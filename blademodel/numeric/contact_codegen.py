@@ -46,7 +46,7 @@ _VIEWS = ("vec", "wvec", "wdof", "wrow", "law_offset")
 #: Functions inlined by LLVM at every call site (``forceinline``): each is called once per step or
 #: evaluation, from one or two places (``contact_forces``, ``rates``, ``guards_of_forces`` and
 #: ``guard_rates`` from ``evaluate``), and a call passes every array argument as 7 to 11 words.
-_FORCEINLINE = ("contact_forces", "rates", "guards_of_forces", "guard_rates", "rk4_step", "mark_seeds",
+_FORCEINLINE = ("contact_forces", "forcing_phase", "rates", "guards_of_forces", "guard_rates", "rk4_step", "mark_seeds",
                 "copy_all_guards")
 
 

@@ -22,8 +22,8 @@ from blademodel.numeric.contract import (WD_ALL, WC_ALL, NONNEG, F_CG, F_DL, F_D
                                          H_N, H_NC, H_NF, H_NG, H_NLAW, H_NS, NK_DAMPED, NK_LOAD, NK_SPRING,
                                          O_CI, O_CIDX, O_CLAW, O_CNK, O_CP, O_CSO, O_FG, O_FI, O_FP, O_KI, O_KP,
                                          R_CC, R_CV, R_FC, R_FS, R_GN, R_GR, R_GAP, R_INVM, R_K, R_KV, R_N0,
-                                         R_OM, R_RK, SC_ROWS, W_FULL, W_HEAD, W_NCA, W_ND, W_NS, W_NSA, WC_AC,
-                                         WC_COUNT, WC_STK, WD_AD, WD_COUNT)
+                                         R_OM, R_RK, R_TAB, R_TG, SC_ROWS, SNAP_ULPS, W_FULL, W_HEAD, W_NCA, W_ND,
+                                         W_NS, W_NSA, WC_AC, WC_COUNT, WC_STK, WD_AD, WD_COUNT)
 
 
 def runtime(x):
@@ -112,7 +112,7 @@ def contact_forces(t, y, cm, I, R, WI, WF):
     Cp, Ci = vec(I, I, O_CP, n + 1), I[I[O_CI]:]
     Kv, Cv = R[I[R_KV]:], R[I[R_CV]:]
     Fp = vec(I, I, O_FP, n + 1)
-    fg, fs, fc, om = vec(I, I, O_FG, I[H_NF]), vec(R, I, R_FS, I[H_NF]), vec(R, I, R_FC, I[H_NF]), vec(R, I, R_OM, ng)
+    fg, fs, fc = vec(I, I, O_FG, I[H_NF]), vec(R, I, R_FS, I[H_NF]), vec(R, I, R_FC, I[H_NF])
     cidx, claw = vec(I, I, O_CIDX, 4 * nc), vec(I, I, O_CLAW, nc)
     cgn, cgr = vec(R, I, R_GN, 4 * nc), vec(R, I, R_GR, 4 * nc)
     cgap, ck = vec(R, I, R_GAP, nc), vec(R, I, R_K, nc)
@@ -123,10 +123,7 @@ def contact_forces(t, y, cm, I, R, WI, WF):
     sg, cg = vec(WF, I, F_SG, ng), vec(WF, I, F_CG, ng)
     cdr = vec(WF, I, F_DR, nc)
     if WF[I[F_T]] != t:   # RK4's middle stages and a step's end share their time: sin and cos kept
-        for g in range(ng):
-            sg[g] = math.sin(om[g] * t)
-            cg[g] = math.cos(om[g] * t)
-        WF[I[F_T]] = t
+        forcing_phase(t, I, R, WF)
     power = 0.0
     for ii in range(nd):
         i = ad[ii] & NONNEG
@@ -199,6 +196,44 @@ def contact_forces(t, y, cm, I, R, WI, WF):
         if cnk[j] == NK_DAMPED and cm[j] != 0:   # dN/dt = k ddelta/dt + c d2delta/dt2
             cNd[j] += cc[j] * penetration_acceleration(j, F, invm, cidx, cgn)
     return power
+
+
+def forcing_phase(t, I, R, WF):
+    """``sin(om_g t)`` and ``cos(om_g t)`` of every frequency group into ``F_SG``, ``F_CG``; ``t`` into ``F_T``.
+
+    A time within ``SNAP_ULPS`` units in the last place of a half-step time ``k hh``
+    (every step's end and RK4 midpoint) reads the phase table (``R_TG``, ``R_TAB``:
+    the values at ``(k mod M) hh``, the forcing being periodic); any other time, or
+    without a table, calls ``sin`` and ``cos``. Which branch a time takes depends on the
+    time alone, so every path to the same time (a whole step, a cluster's sub-steps)
+    reads the same forcing. The table's value differs from ``sin(om_g t)`` by rounding
+    only: the phase ``om_g t`` itself is rounded to a unit in the last place of ``om_g t``,
+    a snapped time is off by ``SNAP_ULPS`` of ``t``, and the table's repetition is off
+    by ``om_g`` times the period's own rounding once a period. It saves the two ``sin``
+    and ``cos`` pairs of a step, about a tenth of a small ring's step.
+    """
+    ng = I[H_NG]
+    sg, cg, om, tg = vec(WF, I, F_SG, ng), vec(WF, I, F_CG, ng), vec(R, I, R_OM, ng), vec(R, I, R_TG, 3)
+    WF[I[F_T]] = t
+    M = tg[2]
+    if M > 0.0:
+        k = math.floor(t * tg[1] + 0.5)
+        if abs(t - k * tg[0]) <= SNAP_ULPS * 2.220446049250313e-16 * abs(t):
+            kk = int(k - math.floor(k / M) * M)
+            Mi = int(M)
+            if kk >= Mi:   # k / M rounded up to a whole number
+                kk -= Mi
+            elif kk < 0:
+                kk += Mi
+            tab = R[I[R_TAB]:]
+            for g in range(ng):
+                e = 2 * (g * Mi + kk)
+                sg[g] = tab[e]
+                cg[g] = tab[e + 1]
+            return
+    for g in range(ng):
+        sg[g] = math.sin(om[g] * t)
+        cg[g] = math.cos(om[g] * t)
 
 
 def forces(t, y, cm, I, R, WI, WF):

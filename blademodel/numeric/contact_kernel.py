@@ -96,13 +96,49 @@ def compile_contact_kernel(model: Model):
     return out
 
 
-def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4", gmax: int = 1) -> tuple[
+#: The longest phase table (``2 steps_per_period``) kept; finer steps evaluate sin and cos at every time.
+MAX_PHASE_TABLE = 1 << 16
+
+
+def phase_table(om, period: float | None, steps_per_period: int | None) -> tuple[list, list]:
+    """``(tg, tab)``: the forcing's phase table (``R_TG``, ``R_TAB`` of :mod:`.contract`).
+
+    ``tab`` holds ``sin(om_g * (k * hh))`` and ``cos(...)`` for ``k = 0 ... M - 1``,
+    ``hh = period / (2 steps_per_period)``, ``M = 2 steps_per_period``: the forcing at
+    the times of a period's steps and RK4 midpoints (libm's values, as the kernel's
+    ``math.sin`` computes them at those times in the first period). Empty (``M = 0``)
+    when some group's frequency is not a whole multiple of ``2 pi / period`` (the
+    table would not repeat), without a period, or when it would be longer than
+    :data:`MAX_PHASE_TABLE`.
+    """
+    none = [0.0, 0.0, 0.0], []
+    if period is None or not steps_per_period or len(om) == 0:
+        return none
+    M = 2 * int(steps_per_period)
+    if M > MAX_PHASE_TABLE:
+        return none
+    for w in om:
+        m = w * period / (2.0 * math.pi)
+        if abs(m - round(m)) > 1e-9 * max(1.0, abs(m)):
+            return none
+    hh = period / M
+    tab = []
+    for w in om:
+        for k in range(M):
+            tab += [math.sin(w * (k * hh)), math.cos(w * (k * hh))]
+    return [hh, 1.0 / hh, float(M)], tab
+
+
+def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4", gmax: int = 1,
+                period: float | None = None, steps_per_period: int | None = None) -> tuple[
         np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The flat arrays ``I``, ``R``, ``WI``, ``WF`` of the kernel (layout: :mod:`.contract`).
 
     ``method``: the stepping method (:mod:`.methods`); classical RK4 is written out in
     the kernel, any other enters as its tableau. ``gmax``: the most guards of a
-    contact's mode (the generated module's ``GMAX``).
+    contact's mode (the generated module's ``GMAX``). ``period``, ``steps_per_period``:
+    the step grid the forcing's phase table is for (:func:`phase_table`; without them,
+    none).
     """
     n, nc = tables.n, len(tables.cgap)
     m = max(nc, 1)
@@ -158,9 +194,11 @@ def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4", gmax: 
                  Fp, Dp, Di, Ap, Ai],
                 [*range(contract.O_KP, contract.O_WI + 1), contract.O_CNK, contract.O_FP, contract.O_DP,
                  contract.O_DI, contract.O_AP, contract.O_AI], np.int64, contract.H_SIZE)
+    tg, tab = phase_table(om, period, steps_per_period)
     R = pack([tables.invm, Kv, Cv, fs, fc, om, tables.cgn, tables.cgr, tables.cgap, tables.ck, tables.p, tables.W,
-              tableau, tables.cc, tables.cn0],
-             [*range(contract.R_INVM, contract.R_RK + 1), contract.R_CC, contract.R_N0], np.float64, 0)
+              tableau, tables.cc, tables.cn0, tg, tab],
+             [*range(contract.R_INVM, contract.R_RK + 1), contract.R_CC, contract.R_N0, contract.R_TG,
+              contract.R_TAB], np.float64, 0)
     sizes = [n] + [m] * 9 + [contract.MAX_GROUPS, contract.MAX_GROUPS, contract.MAX_LAW_STATES, n_state, m * m,
                              m, 1, n, m, 3, m * gmax, m, m]
     WF = pack([np.zeros(k) for k in sizes],
@@ -272,7 +310,8 @@ class ContactIntegrator(Integrator):
 
     def _pack(self) -> None:
         """The kernel's tables from ``self.tables``, and fresh work arrays."""
-        self.I, self.R, self.WI, self.WF = pack_tables(self.tables, self.n_state, self.method.name, self.kmeta["gmax"])
+        self.I, self.R, self.WI, self.WF = pack_tables(self.tables, self.n_state, self.method.name, self.kmeta["gmax"],
+                                                       self.period, self.steps_per_period)
         self.SC = np.zeros((contract.SC_ROWS + max(self.method.stages - 1, 0), self.n_state))
         self.GS = np.zeros((contract.GS_ROWS, max(self.nc, 1), self.kmeta["gmax"]))
         self._run_end = None

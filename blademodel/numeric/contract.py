@@ -78,7 +78,14 @@ O_FP, O_DP, O_DI, O_AP, O_AI, F_ACC = 54, 55, 56, 57, 58, 59
 #: (``WF``) the guard offsets of the contacts marked ``WC_NEAR``, ``GMAX`` per contact; the time of each
 #: contact's last change of mode (NaN: none in this run); until when a suspect's crossings are noise.
 F_GOFF, F_TLAST, F_NOISE = 60, 61, 62
-H_SIZE = 63    #: header length
+#: (``R``) the forcing's phase table: ``R_TG`` holds ``(hh, 1 / hh, M)``, the half step ``hh = period /
+#: (2 steps_per_period)`` and the table's length ``M = 2 steps_per_period`` (0: no table); ``R_TAB`` the sin
+#: and cos of every frequency group at the half-step times of one period, ``(sin, cos)`` pairs, group by
+#: group (``forcing_phase``).
+R_TG, R_TAB = 63, 64
+H_SIZE = 65    #: header length
+#: A time within this many units in the last place of a half-step time ``k hh`` reads the phase table.
+SNAP_ULPS = 8.0
 #: Rows of the kernel's stage buffer ``SC`` before the extra stages of a tableau method
 #: (row ``SC_Y0``: the state at the start of a step whose events are being handled).
 SC_ROWS = 10
