@@ -387,6 +387,39 @@ def test_the_coulomb_pair_turns_at_a_nonsmooth_fold_and_back_at_a_smooth_one():
             assert on_upper[0] and values[switch - 1] >= fold.param - 1e-3 and values[switch] <= fold.param + 1e-3
 
 
+def test_the_coulomb_pair_passes_its_nonsmooth_fold_from_the_unstable_arm():
+    """Going down in omega the Coulomb pair's branch comes to the nonsmooth fold near 420.68 rad/s along the unstable
+    arm (10 events a period), where no orbit lies ahead; it used to stop there. Newton's method next to the turn
+    converges back to the unstable arm; a little further back in the field, from the last orbit displaced along its
+    unstable eigenvector onto the side whose run has the other event sequence, it finds the stable arm. The branch
+    goes on down that arm to 410 rad/s. Checked: the turn lies between the smooth fold and the top of the unstable
+    arm; the branch jumps back in the field by less than 1e-3 of its range there and lands on an orbit with a
+    brief stick more (12 events), stable; every point of it below the turn down to 420 rad/s is the orbit a
+    warm-started sweep coming up from 419 rad/s settles on (the lower arm; first harmonic to 1e-8), and no point
+    of the upper arm is."""
+    cfg = BladePair(friction="coulomb")
+    b = continuation(cfg, "omega", 430.0, 410.0, workers=1)
+    assert b.message == "reached omega = 410"
+    (fold,), (nf,) = b.points("fold"), b.points("nonsmooth-fold")
+    assert 420.3 < fold.param < 420.4 < 420.6 < nf.param < 420.7 and fold.index < nf.index
+    k = nf.index
+    assert not b.stable[fold.index + 1:k + 1].any() and b.events[k] == 10
+    assert b.params[k] == b.params[fold.index + 1:k + 1].max()       # the top of the unstable arm
+    assert 0 < b.params[k] - b.params[k + 1] < 1e-3 * 20.0
+    assert b.stable[k + 1:].all() and b.events[k + 1] == 12
+    i = b.state_names.index("x1")
+    below = np.flatnonzero((np.arange(b.params.size) > k) & (b.params >= 420.0))
+    assert below.size >= 2
+    values = b.params[below][::-1]   # rising
+    sweep = _sweep_amplitudes(cfg, [419.0, *values], periods=300)[1:]
+    branch = np.abs(b.harmonics[below, i])[::-1]
+    np.testing.assert_allclose(sweep, branch, rtol=1e-8)
+    both = values > fold.param   # where the upper arm exists too, 1 % away
+    o = np.argsort(b.params[:fold.index + 1])
+    upper = np.interp(values[both], b.params[:fold.index + 1][o], np.abs(b.harmonics[:fold.index + 1, i])[o])
+    assert both.sum() >= 1 and np.all(np.abs(upper - sweep[both]) > 3e-3 * sweep[both])
+
+
 def test_the_coulomb_pair_crosses_a_kink_where_the_arclength_corrections_fail():
     """Near 164.914 rad/s a stick phase of the Coulomb pair's orbit appears (a multiplier jumps from 0.175 to
     0.068): the arclength corrections fail at every step length there, and the branch used to stop. Shooting at

@@ -406,7 +406,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
     special: list = []
     h = ds
     message = f"left [{lo:g}, {hi:g}] in {name}"
-    jumped = ahead = False
+    jumped = ahead = switched = False
     while len(pts) < max_points:
         X_pred, A_pred = ctx.predict(pts, X, T, A, h)
         X_new, m_new, A_new = ctx.correct(X_pred, T, m, A_pred)
@@ -427,6 +427,13 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
             if abs(travel[-1]) > 1e-3 * np.linalg.norm(travel):
                 X_new, m_new, A_new = _shoot_ahead(ctx, X, np.sign(travel[-1]), m)
                 secant = X_new is not None
+        arm = False
+        if X_new is None and h / 2 < ds_min and jumped and not switched and pts[-1]["unstable"]:
+            # even the jump failed, on an unstable arm: a turn reached from its unstable side (a
+            # nonsmooth fold, where no orbit lies ahead); the stable arm that the turn leads back onto
+            switched = True
+            X_new, m_new, A_new = _other_arm(ctx, pts, X, m)
+            arm = X_new is not None
         if X_new is None:
             if h / 2 < ds_min:
                 if not jumped and len(pts) > 1:
@@ -453,8 +460,13 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
                 message = f"the step fell below ds_min = {ds_min:g} at {name} = {X[-1] * span:.6g}: {ctx.why}"
                 break
             continue
-        new["regular"] = not secant
-        found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
+        new["regular"] = not (secant or arm)
+        if arm:   # the turn is at the unstable arm's last orbit, to within the last step tried past it
+            last = pts[-1]
+            found = [SpecialPoint(kind="nonsmooth-fold", param=last["param"], state=last["state"].copy(),
+                                  multiplier=complex(last["mu"][0]), index=len(pts) - 1, mode=_copy(last["mode"]))]
+        else:
+            found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
         off_circle = any(_off_circle(q) for q in found)
         if not jumped and h / 2 >= ds_min and off_circle:
             # the stability changed, but no multiplier lies on the unit circle where the change is
@@ -481,6 +493,8 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
         if off_circle and T_new[-1] * T[-1] < 0:
             found = [_nonsmooth_fold(q) if _off_circle(q) else q for q in found]
         jumped = False
+        if new["regular"]:
+            switched = False   # a turn further on may be reached from its unstable side too
         special += found
         pts.append(new)
         # each state scaled by its excursion on the newest orbit: amplitudes that grow a
@@ -517,6 +531,54 @@ def _shoot_ahead(ctx, X, direction, mode, fractions=(1e-6, 1e-5, 1e-4, 1e-3)):
         Xv[-1] += direction * frac
         X_new, m_new, A_new = ctx.correct_at_value(Xv, mode)
         if X_new is not None:
+            return X_new, m_new, A_new
+    return None, mode, None
+
+
+def _other_arm(ctx, pts, X, mode, fractions=(1e-5, 1e-4, 1e-3), displacement=1e-4):
+    """The stable arm of a nonsmooth fold reached from its unstable arm: ``(X, mode, A)`` or ``(None, mode, None)``.
+
+    At such a turn (a grazing where the branch folds back: the Coulomb pair at
+    420.684 rad/s going down) the unstable arm ``a`` ends and the other arm ``b`` goes
+    back in the field, its orbits with the grazing event sequence (a brief stick
+    more, say). Next to the turn the two are too close for Newton's method: from
+    the last orbit displaced along its unstable eigenvector, onto the side whose run
+    has the other event sequence, it converges back to ``a``. A little further back
+    in the field (``fractions`` of the range) the arms have separated, and the same
+    start converges to ``b``. Accepted: an orbit whose events differ from the last
+    point's (measured on the Coulomb pair: at 1e-5 and 5e-5 of a 20 rad/s range back,
+    Newton returned to ``a``; at 5e-4 it found the 12-event stable orbit,
+    ``|mu| = 0.735``).
+    """
+    last = pts[-1]
+    mu, V = np.linalg.eig(last["J"])
+    k = int(np.argmax(np.abs(mu)))
+    if abs(mu[k]) <= 1.0 or abs(mu[k].imag) > 1e-9 * abs(mu[k]):
+        return None, mode, None
+    n = ctx.n
+    e = np.real(V[:, k]) / ctx.scale
+    e /= np.max(np.abs(e))
+    lam = X[-1] * ctx.span
+    P = ctx.fam.map_at(lam)
+    side = None
+    for sign in (1.0, -1.0):
+        try:
+            P(X[:n] * ctx.scale + sign * displacement * e * ctx.scale, _copy(mode))
+        except FlowError:
+            continue
+        if P.last_events != last["events"]:
+            side = sign
+            break
+    if side is None:
+        return None, mode, None
+    back = -np.sign(X[-1] - pts[-2]["param"] / ctx.span)   # the field's way back from the turn
+    for frac in fractions:
+        Xg = np.append(X[:n] + side * displacement * e, X[-1] + back * frac)
+        X_new, m_new, _ = ctx.correct_at_value(Xg, mode, jacobian=False)
+        if X_new is None or ctx.events == last["events"]:
+            continue
+        A_new = ctx._jacobian_at(X_new, m_new)
+        if A_new is not None:
             return X_new, m_new, A_new
     return None, mode, None
 
