@@ -210,7 +210,7 @@ def forcing_phase(t, I, R, WF):
     only: the phase ``om_g t`` itself is rounded to a unit in the last place of ``om_g t``,
     a snapped time is off by ``SNAP_ULPS`` of ``t``, and the table's repetition is off
     by ``om_g`` times the period's own rounding once a period. It saves the two ``sin``
-    and ``cos`` pairs of a step, about a tenth of a small ring's step.
+    and ``cos`` pairs of a step (about 28 ns a pair), 5 % of a two-blade ring's step.
     """
     ng = I[H_NG]
     sg, cg, om, tg = vec(WF, I, F_SG, ng), vec(WF, I, F_CG, ng), vec(R, I, R_OM, ng), vec(R, I, R_TG, 3)
