@@ -4,6 +4,7 @@ import math
 
 import mpmath
 import numpy as np
+import pytest
 
 from blademodel.config import BladedDisk
 from blademodel.numeric import ContactIntegrator, contract
@@ -13,8 +14,25 @@ S = 1000
 
 
 def _open_ring(**kw):
-    """Three blades, engine order 1, gaps too wide to close: ``dy/dt`` at rest is the forcing over the mass."""
+    """Three blades, engine order 1, gaps too wide to close: at rest the generalized forces are the forcing."""
     return ContactIntegrator(BladedDisk(blades=3, engine_order=1, gap=1.0).build(), steps_per_period=S, **kw)
+
+
+def _three_groups():
+    """Two masses, an open contact, and loads in three frequency groups: a constant, omega and 3 omega."""
+    from blademodel.config import config_from_data
+    cfg = config_from_data({
+        "model": "components", "name": "groups", "parameters": {"omega": 290.0},
+        "masses": [{"name": 1, "m": 0.085}, {"name": 2, "m": 0.085}],
+        "springs": [{"a": "x1", "k": 1e5}, {"a": "y1", "k": 3e6}, {"a": "x2", "k": 1e5}, {"a": "y2", "k": 3e6}],
+        "dampers": [{"a": "x1", "c": 3.5}, {"a": "x2", "c": 3.5}],
+        "forces": [{"mass": 1, "amplitude": 60, "omega": "omega", "phase": 1.047, "angle": 0.524},
+                   {"type": "constant", "mass": 1, "value": -0.834, "angle": 1.5707963267948966},
+                   {"type": "multiharmonic", "mass": 2, "omega": "omega", "angle": 0.524,
+                    "harmonics": [{"order": 1, "amplitude": 60}, {"order": 3, "amplitude": 6, "phase": 0.5}]}],
+        "contacts": [{"name": "c", "bodies": [1, 2], "gap": 1.0, "alpha": 1.047, "k": 4e5,
+                      "friction": {"law": "coulomb", "mu": 0.5}}]})
+    return ContactIntegrator(cfg.build(), steps_per_period=S)
 
 
 def _forcing(integ, t):
@@ -46,11 +64,15 @@ def _grid_times(period, per):
     return out
 
 
-def test_grid_times_read_the_table_and_other_times_call_sin_and_cos():
-    integ = _open_ring()
+@pytest.mark.parametrize("make", [_open_ring, _three_groups], ids=["ring", "three groups"])
+def test_grid_times_read_the_table_and_other_times_call_sin_and_cos(make):
+    integ = make()
     hh, _, M = integ.R[integ.I[contract.R_TG]:integ.I[contract.R_TG] + 3]
     assert M == 2 * S
     period = integ.period
+
+    if make is _three_groups:
+        assert sorted(integ.tables.forcing[4]) == [0.0, 290.0, 870.0]
 
     def table(om, t):
         kk = round(t / hh) % int(M)
