@@ -432,7 +432,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
             # even the jump failed, on an unstable arm: a turn reached from its unstable side (a
             # nonsmooth fold, where no orbit lies ahead); the stable arm that the turn leads back onto
             switched = True
-            X_new, m_new, A_new = _other_arm(ctx, pts, X, m)
+            X_new, m_new, A_new = _other_arm(ctx, pts, X, m, ds_max)
             arm = X_new is not None
         if X_new is None:
             if h / 2 < ds_min:
@@ -535,7 +535,7 @@ def _shoot_ahead(ctx, X, direction, mode, fractions=(1e-6, 1e-5, 1e-4, 1e-3)):
     return None, mode, None
 
 
-def _other_arm(ctx, pts, X, mode, fractions=(1e-5, 1e-4, 1e-3), displacement=1e-4):
+def _other_arm(ctx, pts, X, mode, reach, fractions=(1e-5, 1e-4, 1e-3), displacement=1e-4):
     """The stable arm of a nonsmooth fold reached from its unstable arm: ``(X, mode, A)`` or ``(None, mode, None)``.
 
     At such a turn (a grazing where the branch folds back: the Coulomb pair at
@@ -548,7 +548,9 @@ def _other_arm(ctx, pts, X, mode, fractions=(1e-5, 1e-4, 1e-3), displacement=1e-
     start converges to ``b``. Accepted: an orbit whose events differ from the last
     point's (measured on the Coulomb pair: at 1e-5 and 5e-5 of a 20 rad/s range back,
     Newton returned to ``a``; at 5e-4 it found the 12-event stable orbit,
-    ``|mu| = 0.735``).
+    ``|mu| = 0.735``), no farther from the last point than ``reach`` (the longest step,
+    in the scaled unknowns): Newton's method may converge anywhere, and an orbit farther
+    away is another branch, not the other arm.
     """
     last = pts[-1]
     mu, V = np.linalg.eig(last["J"])
@@ -575,7 +577,7 @@ def _other_arm(ctx, pts, X, mode, fractions=(1e-5, 1e-4, 1e-3), displacement=1e-
     for frac in fractions:
         Xg = np.append(X[:n] + side * displacement * e, X[-1] + back * frac)
         X_new, m_new, _ = ctx.correct_at_value(Xg, mode, jacobian=False)
-        if X_new is None or ctx.events == last["events"]:
+        if X_new is None or ctx.events == last["events"] or np.linalg.norm(X_new - X) > reach:
             continue
         A_new = ctx._jacobian_at(X_new, m_new)
         if A_new is not None:
