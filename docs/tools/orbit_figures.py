@@ -81,28 +81,34 @@ def _warm_sweep(law, values, periods=300):
 
 
 def nonsmooth_fold():
-    """The Coulomb pair from 410 to 430 rad/s: a nonsmooth fold at 420.684, a smooth one at 420.350, and warm
-    sweeps up and down (0.01 rad/s apart, 300 periods a value) across both."""
+    """The Coulomb pair between 410 and 430 rad/s, continued up and down: a nonsmooth fold at 420.684, a smooth one at
+    420.350, and warm sweeps up and down (0.01 rad/s apart, 300 periods a value) across both. Going down, the
+    branch reaches the nonsmooth fold along its unstable arm and goes on down the stable one."""
     cfg = BladePair(friction="coulomb")
-    t = time.process_time()
-    b = continuation(cfg, "omega", 410.0, 430.0, ds=0.002, ds_max=0.002, max_points=3000, workers=1)
-    _report("pair, coulomb, 410-430", b, t)
+    branches = []
+    for a, b_ in ((410.0, 430.0), (430.0, 410.0)):
+        t = time.process_time()
+        b = continuation(cfg, "omega", a, b_, ds=0.002, ds_max=0.002, max_points=3000, workers=1)
+        _report(f"pair, coulomb, {a:g}-{b_:g}", b, t)
+        branches.append(b)
     up_w = np.round(np.arange(420.20, 420.80, 0.01), 4)
     down_w = up_w[::-1]
     up = _warm_sweep("coulomb", [419.0, 420.0, *up_w])[2:]
     down = _warm_sweep("coulomb", [422.0, 421.0, *down_w])[2:]
-    fig = Figure(figsize=(7, 4.2))
-    ax = fig.add_subplot()
-    branch_figure(b, "x1", ax=ax)
-    ax.plot(up_w, up, "^", color="C3", ms=4, mfc="none", label="warm sweep, up")
-    ax.plot(down_w, down, "v", color="C2", ms=4, mfc="none", label="warm sweep, down")
-    ax.set_xlim(420.15, 420.85)
-    inside = (b.params > 420.15) & (b.params < 420.85)
-    hh = np.abs(b.harmonics[inside, b.state_names.index("x1")])
-    ax.set_ylim(hh.min() * 0.998, hh.max() * 1.002)
-    ax.legend(fontsize=7)
-    ax.set_title("blade pair, Coulomb: a nonsmooth fold (a grazing, right) and a smooth fold (left)", fontsize=9)
-    ax.set_xlabel("ω (rad/s)")
+    fig = Figure(figsize=(10, 4.2))
+    axes = fig.subplots(1, 2, sharey=True)
+    for ax, b, way in zip(axes, branches, ("up from 410 rad/s", "down from 430 rad/s")):
+        branch_figure(b, "x1", ax=ax)
+        ax.plot(up_w, up, "^", color="C3", ms=4, mfc="none", label="warm sweep, up")
+        ax.plot(down_w, down, "v", color="C2", ms=4, mfc="none", label="warm sweep, down")
+        ax.set_xlim(420.15, 420.85)
+        ax.legend(fontsize=7)
+        ax.set_title(f"continued {way}", fontsize=9)
+        ax.set_xlabel("ω (rad/s)")
+    inside = (branches[0].params > 420.15) & (branches[0].params < 420.85)
+    hh = np.abs(branches[0].harmonics[inside, branches[0].state_names.index("x1")])
+    axes[0].set_ylim(hh.min() * 0.998, hh.max() * 1.002)
+    fig.suptitle("blade pair, Coulomb: a nonsmooth fold (a grazing, right) and a smooth fold (left)", fontsize=9)
     fig.tight_layout()
     fig.savefig(OUT / "nonsmooth_fold_coulomb.png", dpi=110)
 
