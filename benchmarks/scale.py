@@ -63,7 +63,7 @@ per period, ``event_tol = 1e-10``.
    small rings' 20-period runs (15 ms) were within the shared machine's noise; seven
    repeats, as three left one model's two measurements 1.4x apart.
 
-Takes about 12 min on the shared 2-core machine (cold part 6 min, 15 compiles;
+Takes about 14 min on the shared 2-core machine (822 s in the last run; cold part 6 min, 15 compiles;
 ``--full`` adds 9 more); ``--skip-cold`` / ``--skip-warm`` run one part (nothing written).
 
 Goals (the issue "Bladed disks"): cold set-up of the 96-blade disk <= 2 x that of the

@@ -105,8 +105,9 @@ def phase_table(om, period: float | None, steps_per_period: int | None) -> tuple
 
     ``tab`` holds ``sin(om_g * (k * hh))`` and ``cos(...)`` for ``k = 0 ... M - 1``,
     ``hh = period / (2 steps_per_period)``, ``M = 2 steps_per_period``: the forcing at
-    the times of a period's steps and RK4 midpoints (libm's values, as the kernel's
-    ``math.sin`` computes them at those times in the first period). Empty (``M = 0``)
+    the times of a period's steps and RK4 midpoints, libm's values (at the first
+    period's step ends, where ``k hh`` equals the loop's time to the bit, the values
+    ``math.sin`` gave the kernel before the table). Empty (``M = 0``)
     when some group's frequency is not a whole multiple of ``2 pi / period`` (the
     table would not repeat), without a period, or when it would be longer than
     :data:`MAX_PHASE_TABLE`.

@@ -33,7 +33,7 @@ bifurcation. A change in the number of events is a grazing, located by bisection
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -462,9 +462,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
             continue
         new["regular"] = not (secant or arm)
         if arm:   # the turn is at the unstable arm's last orbit, to within the last step tried past it
-            last = pts[-1]
-            found = [SpecialPoint(kind="nonsmooth-fold", param=last["param"], state=last["state"].copy(),
-                                  multiplier=complex(last["mu"][0]), index=len(pts) - 1, mode=_copy(last["mode"]))]
+            found = [_special("nonsmooth-fold", pts[-1], len(pts) - 1)]
         else:
             found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
         off_circle = any(_off_circle(q) for q in found)
@@ -491,7 +489,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
             h = max(h, 4 * ds_min)   # past the kink: steps grow again from there
         ahead = False
         if off_circle and T_new[-1] * T[-1] < 0:
-            found = [_nonsmooth_fold(q) if _off_circle(q) else q for q in found]
+            found = [replace(q, kind="nonsmooth-fold") if _off_circle(q) else q for q in found]
         jumped = False
         if new["regular"]:
             switched = False   # a turn further on may be reached from its unstable side too
@@ -522,15 +520,19 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
                   message=message)
 
 
-def _shoot_ahead(ctx, X, direction, mode, fractions=(1e-6, 1e-5, 1e-4, 1e-3)):
-    """Shooting at the field's values a little past the last point ``X`` (``direction`` +1 or -1 in the field),
-    from the last orbit: the first that converges (its unknowns, mode and Jacobian), else ``(None, mode, None)``.
-    ``fractions`` are of the range (the field's scaled unit)."""
+def _shoot_ahead(ctx, X, direction, mode, fractions=(1e-6, 1e-5, 1e-4, 1e-3), accept=None):
+    """Shooting at the field's values a little past ``X`` (``direction`` +1 or -1 in the field), from its state:
+    the first orbit that converges and that ``accept(X_new)`` takes (its unknowns, mode and Jacobian; ``ctx.events``
+    holds its events when ``accept`` is called), else ``(None, mode, None)``. ``fractions`` are of the range (the
+    field's scaled unit)."""
     for frac in fractions:
         Xv = X.copy()
         Xv[-1] += direction * frac
-        X_new, m_new, A_new = ctx.correct_at_value(Xv, mode)
-        if X_new is not None:
+        X_new, m_new, _ = ctx.correct_at_value(Xv, mode, jacobian=False)
+        if X_new is None or (accept is not None and not accept(X_new)):
+            continue
+        A_new = ctx._jacobian_at(X_new, m_new)
+        if A_new is not None:
             return X_new, m_new, A_new
     return None, mode, None
 
@@ -574,15 +576,8 @@ def _other_arm(ctx, pts, X, mode, reach, fractions=(1e-5, 1e-4, 1e-3), displacem
     if side is None:
         return None, mode, None
     back = -np.sign(X[-1] - pts[-2]["param"] / ctx.span)   # the field's way back from the turn
-    for frac in fractions:
-        Xg = np.append(X[:n] + side * displacement * e, X[-1] + back * frac)
-        X_new, m_new, _ = ctx.correct_at_value(Xg, mode, jacobian=False)
-        if X_new is None or ctx.events == last["events"] or np.linalg.norm(X_new - X) > reach:
-            continue
-        A_new = ctx._jacobian_at(X_new, m_new)
-        if A_new is not None:
-            return X_new, m_new, A_new
-    return None, mode, None
+    return _shoot_ahead(ctx, np.append(X[:n] + side * displacement * e, X[-1]), back, mode, fractions,
+                        accept=lambda X_new: ctx.events != last["events"] and np.linalg.norm(X_new - X) <= reach)
 
 
 def _tangent(A, previous):
@@ -863,12 +858,9 @@ class _Context:
                 kind = "neimark-sacker"
             else:
                 kind = "period-doubling" if mu.real < 0 else "fold"
-            found.append(SpecialPoint(kind=kind, param=best["param"], state=best["state"], multiplier=complex(mu),
-                                      index=index, mode=_copy(best["mode"])))
+            found.append(_special(kind, best, index, mu))
         if a["events"] != b["events"]:
-            best = self._locate_grazing(a, b, Xa, Ta, mode, locate_tol)
-            found.append(SpecialPoint(kind="grazing", param=best["param"], state=best["state"],
-                                      multiplier=complex(best["mu"][0]), index=index, mode=_copy(best["mode"])))
+            found.append(_special("grazing", self._locate_grazing(a, b, Xa, Ta, mode, locate_tol), index))
         return found
 
     def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian, tol=None, at_value=False):
@@ -996,10 +988,11 @@ def _fourier_row(m: int, k: int) -> np.ndarray:
     return _FOURIER[(m, k)]
 
 
-def _nonsmooth_fold(p: SpecialPoint) -> SpecialPoint:
-    """A stability change with no multiplier on the circle where the branch turns back: a nonsmooth fold."""
-    return SpecialPoint(kind="nonsmooth-fold", param=p.param, state=p.state, multiplier=p.multiplier,
-                        index=p.index, mode=p.mode)
+def _special(kind: str, point: dict, index: int, multiplier=None) -> SpecialPoint:
+    """A special point at the branch point ``point`` (``multiplier``: by default its largest)."""
+    mu = point["mu"][0] if multiplier is None else multiplier
+    return SpecialPoint(kind=kind, param=point["param"], state=point["state"], multiplier=complex(mu), index=index,
+                        mode=_copy(point["mode"]))
 
 
 def _off_circle(p: SpecialPoint) -> bool:
