@@ -450,6 +450,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
                 break
             h /= 2
             continue
+        iterations = ctx.iterations   # the point's own corrections (locating its bifurcations makes others)
         new = ctx.point(X_new, m_new, A_new)
         if new["residual"] > ctx.tol:
             # a correction that returned a state that is not an orbit in the mode it is recorded in
@@ -500,7 +501,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
         X, T, A = ctx.rescale(_state_scale(new["Y"], n_q), X_new, T_new, A_new)
         new["X"], new["A"] = X, A
         m = m_new
-        h = min(h * 1.5, ds_max) if ctx.iterations <= 4 else (h if ctx.iterations <= 8 else h / 2)
+        h = min(h * 1.5, ds_max) if iterations <= 4 else (h if iterations <= 8 else h / 2)
         if progress is not None:
             progress(len(pts), X[-1] * span)
         lam = X[-1] * span
@@ -702,7 +703,7 @@ class _Context:
         A[:, n] = (self.fam.map_at(lam + d * self.span).plain(y, mode) - P(y, mode)[0]) / self.scale / d
         return A
 
-    def correct(self, X, T, mode, A=None, jacobian=True, tol=None):
+    def correct(self, X, T, mode, A=None, jacobian=True, tol=None, newton=True):
         """Newton on the orbit and arclength conditions from the prediction ``X``; ``(None, ..)`` on failure.
 
         With ``A`` (the Jacobian at the last point) the first attempt is Broyden's
@@ -714,12 +715,16 @@ class _Context:
         between the points), the correction is done again from that mode. Returns the
         point, its mode and its Jacobian (None without ``jacobian``: for a test that needs
         only the orbit's events, ``self.events``, which the last residual's run counted).
-        ``tol`` replaces ``self.tol`` for this correction.
+        ``tol`` replaces ``self.tol`` for this correction. Without ``newton`` (and with
+        ``A``) only Broyden's method is tried, in each mode: a trial that may fail cheaply.
         """
         tol = self.tol if tol is None else tol
         Xp = X.copy()
         self.why = ""
-        tries = ([(mode, True)] if A is not None else []) + [(mode, False)]
+        if not newton and A is None:
+            raise ValueError("a correction without Newton's method needs A, the matrix Broyden's method starts from")
+        retry = not newton   # how a retry from another mode corrects: Broyden's method (True) or Newton's
+        tries = ([(mode, True)] if A is not None else []) + ([(mode, False)] if newton else [])
         tried = set()
         while tries:
             mode, chord = tries.pop(0)
@@ -764,9 +769,9 @@ class _Context:
                     raise FlowError(f"no convergence in {it + 1} corrections (residual {res:.2g})")
             except (FlowError, np.linalg.LinAlgError, ValueError) as e:   # ValueError: a field out of its range
                 self.why = str(e)
-                if first_end is not None and (_key(first_end), False) not in tried and \
+                if first_end is not None and (_key(first_end), retry) not in tried and \
                         all(_key(first_end) != _key(m) for m, _ in tries):
-                    tries.append((_copy(first_end), False))
+                    tries.append((_copy(first_end), retry))
                 continue
             self.iterations = it
             if _same(mode_end, mode):
@@ -779,8 +784,8 @@ class _Context:
             # converged, but to an orbit that comes back in another mode: solving again from the
             # same mode (Newton after Broyden) lands there too; that mode is the one to try
             tries = [(m, c) for m, c in tries if _key(m) != _key(mode)]
-            if (_key(mode_end), False) not in tried:
-                tries.append((_copy(mode_end), False))
+            if (_key(mode_end), retry) not in tried:
+                tries.append((_copy(mode_end), retry))
             self.why = "the orbit's mode at the section keeps changing (it switches exactly there)"
         return None, mode, None
 
@@ -863,7 +868,7 @@ class _Context:
             found.append(_special("grazing", self._locate_grazing(a, b, Xa, Ta, mode, locate_tol), index))
         return found
 
-    def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian, tol=None, at_value=False):
+    def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian, tol=None, at_value=False, newton=True):
         """The branch point between two of its points ``X_lo``, ``X_hi``, a fraction ``theta`` of the way.
 
         Predicted on the chord between them and corrected with ``A`` as Broyden's first
@@ -884,8 +889,8 @@ class _Context:
         if fixed:
             normal = np.zeros_like(normal)
             normal[-1] = 1.0
-        Xm, mm, Am = self.correct(Xp, normal, mode, A, jacobian=jacobian, tol=tol)
-        if Xm is None and not fixed:
+        Xm, mm, Am = self.correct(Xp, normal, mode, A, jacobian=jacobian, tol=tol, newton=newton)
+        if Xm is None and not fixed and newton:
             Xm, mm, Am = self.correct_at_value(Xp, mode, jacobian=jacobian)
         if Xm is not None and not _between(Xm, X_lo, X_hi):
             # corrected away from the bracket (a kink of the map, a fold of the branch across
@@ -944,18 +949,31 @@ class _Context:
 
         The count has no smooth test function, so the bracket is halved; each trial needs
         only its orbit's events (no Jacobian, no multipliers), and its prediction, halfway
-        between the bracket's corrected ends, comes ever closer to the branch. A trial only
-        has to tell on which side of the grazing point it lies, so it is solved to
-        :data:`TRIAL_ACCURACY` of the bracket's width (never looser than the branch's
-        ``tol`` needs less): where the bracket is wide, one or two corrections. The
-        located point is solved to ``tol`` and alone gets its Jacobian.
+        between the bracket's corrected ends, comes ever closer to the branch. Trials are
+        solved at a fixed value of the field (where the ends' values differ). The bracket
+        is closed when it is ``locate_tol`` wide in the scaled unknowns, or in the field
+        alone once a halving no longer shrinks it by a quarter: an arm of the branch may
+        end at the grazing (a small hysteresis loop whose arms end where their guards
+        touch zero: the bilinear pair at 313.1142 rad/s, where orbits with 20 and 22
+        events coexist over 1e-4 rad/s), and then the state across the bracket does not
+        close at all. A trial only has to tell on which side of the grazing point it
+        lies, so it is solved to :data:`TRIAL_ACCURACY` of the bracket's width (never
+        looser than the branch's ``tol`` needs less): where the bracket is wide, one or
+        two corrections. The located point is solved to ``tol`` and alone gets its
+        Jacobian.
         """
         X_lo, X_hi = Xa, b["X"]
         best = None
-        while float(np.linalg.norm(X_hi - X_lo)) > locate_tol:
-            trial_tol = max(self.tol, TRIAL_ACCURACY * float(np.linalg.norm(X_hi - X_lo)))
+        previous = np.inf
+        while True:
+            width = float(np.linalg.norm(X_hi - X_lo))
+            if width <= locate_tol or (abs(X_hi[-1] - X_lo[-1]) <= locate_tol and width > 0.75 * previous):
+                break   # closed, or closed in the field while the state across it no longer closes
+            previous = width
+            trial_tol = max(self.tol, TRIAL_ACCURACY * width)
             for theta in (0.5, 0.25, 0.75):   # a trial right at the grazing point can stall: one beside it
-                Xm, mm, _ = self._corrected(X_lo, X_hi, theta, mode, a["A"], False, trial_tol, at_value=True)
+                Xm, mm, _ = self._corrected(X_lo, X_hi, theta, mode, a["A"] if theta <= 0.5 else b["A"], False,
+                                            trial_tol, at_value=True, newton=False)
                 if Xm is not None:
                     break
             if Xm is None:
