@@ -343,6 +343,39 @@ def test_a_branch_plot_overlaid_on_a_sweep(tmp_path, capsys):
     assert "did not vary 'F0'" in capsys.readouterr().err
 
 
+def test_a_grazing_where_an_arm_ends_is_located_to_the_tolerance_in_the_field():
+    """Near 313.1142 rad/s the bilinear pair's orbits with 22 and with 20 events a period coexist over about
+    1e-4 rad/s: each arm ends where one of its guards touches zero, and across the grazing the section state jumps
+    by about 1e-5 of its scale. Bisection at fixed values of the field closes the bracket in the field but not in
+    the state; it stops there. Checked: the located point is an orbit with the far side's events, and the near
+    side's arm, followed by shooting in steps that shrink towards it, still exists within locate_tol of the range
+    before it, an orbit far from the located one."""
+    cfg = BladePair(friction="bilinear")
+    locate_tol, start, stop = 1e-7, 313.0, 313.25
+    b = continuation(cfg, "omega", start, stop, locate_tol=locate_tol, workers=1)
+    assert b.message == "reached omega = 313.25"
+    (g,) = b.points("grazing")
+    near, far = b.events[g.index], b.events[-1]
+    assert (near, far) == (22, 20) and 313.1141 < g.param < 313.1143
+
+    def orbit(w, guess, mode):
+        model = cfg.model_copy(update={"omega": float(w)}).build()
+        o = find_periodic_orbit(model, guess=guess, mode=mode, transient=0)
+        P = PeriodMap(make_integrator(model))
+        P(o.state, o.mode)
+        return o, P.last_events
+
+    located, events = orbit(g.param, g.state, g.mode)
+    assert events == far and np.max(np.abs(located.state - g.state) / located.scale) < 1e-8
+    end = g.param - locate_tol * (stop - start)
+    y, mode = b.states[g.index], None
+    for w in b.params[g.index] + (end - b.params[g.index]) * (1 - np.geomspace(1, 1e-4, 12)) / (1 - 1e-4):
+        o, events = orbit(w, y, mode)
+        assert events == near
+        y, mode = o.state, o.mode
+    assert np.max(np.abs(o.state - located.state) / located.scale) > 10 * locate_tol   # measured: 99 times
+
+
 def test_the_coulomb_pair_turns_at_a_nonsmooth_fold_and_back_at_a_smooth_one():
     """Near 420.68 rad/s the Coulomb pair's stable branch (a brief stick every period: 12 events) turns back where
     that stick vanishes, a grazing at which a multiplier jumps across the unit circle (0.53 to 1.07) instead of
