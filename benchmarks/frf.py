@@ -162,6 +162,8 @@ def main() -> int:
         t_u = t_f * (need + 1) / (FIXED_TRANSIENT + 1)
         t_d = min(times["differences"])
         rows.append({"law": law, "points": len(values), "unstable": int(np.sum(~stable)),
+                     "integrations": branch.integrations / len(branch.params),
+                     "replays": branch.replays / len(branch.params),
                      "special": len(branch.special), "agree": agree, "agree_median": agree_median,
                      "agree_fixed": agree_fixed, "agree_rest": agree_rest, "t_differences": t_d,
                      "tangent_gain": t_d / t_c, "sweep_periods": periods, "rest_periods": periods_rest,
@@ -176,7 +178,8 @@ def main() -> int:
     print(f"FRF of the pair, omega = {START:g} ... {STOP:g} rad/s, each point to {TOL:g} (CPU: min of "
           f"{args.repeats} interleaved repeats, thread time)")
     print(C.table(rows, [("law", "law", "s"), ("points", "points", "d"), ("unstable", "unstable", "d"),
-                         ("special", "special points", "d"), ("agree", "H1 adaptive vs cont.", ".1e"),
+                         ("special", "special points", "d"), ("integrations", "integrations a point", ".2f"),
+                         ("replays", "replays a point", ".2f"), ("agree", "H1 adaptive vs cont.", ".1e"),
                          ("agree_median", "median", ".1e"),
                          ("agree_fixed", "H1 fixed vs cont.", ".1e"), ("agree_rest", "H1 from rest vs cont.", ".1e"),
                          ("sweep_periods", "adaptive periods", "d"), ("rest_periods", "from-rest periods", "d"),

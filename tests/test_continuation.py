@@ -113,9 +113,33 @@ def test_a_branch_file_round_trip(pd_branch, tmp_path):
     assert np.array_equal(back.events, pd_branch.events) and np.array_equal(back.residuals, pd_branch.residuals)
     assert np.allclose(back.harmonics, pd_branch.harmonics, rtol=1e-14, atol=0)
     assert [(p.kind, p.param) for p in back.special] == [(p.kind, p.param) for p in pd_branch.special]
+    assert (back.integrations, back.replays) == (pd_branch.integrations, pd_branch.replays) and back.integrations > 0
     with xr.open_dataset(path) as ds:
         assert list(ds["state"].values) == pd_branch.state_names and ds.attrs["field"] == "gamma"
         assert '"friction": "bilinear"' in ds.attrs["config"]
+
+
+def test_a_branch_counts_the_integrations_it_made(monkeypatch):
+    """``Branch.integrations`` is the number of the kernel's integrations of the period map after the first orbit:
+    every call of the integrator's ``advance`` while the branch is continued, less those of finding the first orbit
+    the same way (counted by wrapping ``advance``, independently of the period maps' own counters)."""
+    from blademodel.numeric.integrator import HybridIntegrator
+    calls = [0]
+    advance = HybridIntegrator.advance
+
+    def counted(self, *args, **kwargs):
+        calls[0] += 1
+        return advance(self, *args, **kwargs)
+
+    monkeypatch.setattr(HybridIntegrator, "advance", counted)
+    cfg = BladePair(friction="bilinear")
+    ig = make_integrator(cfg.model_copy(update={"omega": 300.0}).build())
+    find_periodic_orbit(None, integrator=ig, workers=1)
+    first = calls[0]
+    calls[0] = 0
+    b = continuation(cfg, "omega", 300.0, 301.0, workers=1)
+    assert len(b.params) > 10 and b.replays >= len(b.params)
+    assert b.integrations == calls[0] - first
 
 
 def test_the_continue_command(tmp_path, capsys):
@@ -136,6 +160,7 @@ def test_the_continue_command(tmp_path, capsys):
     assert rep["doubled"][0]["values"][0] == pd[0]["value"] and any(rep["doubled"][0]["stable"])
     from blademodel.orbits.branch_file import load_branch
     assert load_branch(tmp_path / "b_pd1.nc").periods == 2
+    assert rep["integrations"] == load_branch(out).integrations >= len(rep["values"])   # the report says the cost
     assert rep["stable"][0] and not rep["stable"][-1] and out.stat().st_size > 0 and png.stat().st_size > 0
     assert main(["continue", yaml, "--param", "no_such_field", "--from", "1", "--to", "2"]) == 2
     assert "no field 'no_such_field'" in capsys.readouterr().err

@@ -152,7 +152,8 @@ def run(args: argparse.Namespace) -> int:
                       quantity=args.quantity, overlay=overlay).savefig(args.plot, dpi=120)
     i = branch.state_names.index(state)
     rep = {"field": branch.field, "periods": branch.periods, "points": len(branch.params),
-           "message": branch.message, "values": branch.params.tolist(),
+           "message": branch.message, "integrations": branch.integrations, "replays": branch.replays,
+           "values": branch.params.tolist(),
            "harmonic1": np.abs(branch.harmonics[:, i]).tolist(), "stable": branch.stable.tolist(),
            "special": [{"kind": p.kind, "value": p.param, "multiplier": [p.multiplier.real, p.multiplier.imag]}
                        for p in branch.special], "state": state,
@@ -166,7 +167,8 @@ def run(args: argparse.Namespace) -> int:
         print(jsonout.dumps(rep))
         return 0
     print(f"{len(branch.params)} period-{branch.periods} orbits from {args.param} = {branch.params[0]:.6g} to "
-          f"{branch.params[-1]:.6g} ({branch.message}); {int(np.sum(~branch.stable))} unstable")
+          f"{branch.params[-1]:.6g} ({branch.message}); {int(np.sum(~branch.stable))} unstable; "
+          f"{branch.integrations} integrations of the period map and {branch.replays} tangent replays")
     for p in branch.special:
         print(f"  {p.kind} at {args.param} = {p.param:.8g} (multiplier {p.multiplier.real:.6g}"
               f"{p.multiplier.imag:+.6g}i)")

@@ -107,6 +107,13 @@ class Branch:
     state_names : list of str
     message : str
         Why the continuation ended.
+    integrations : int
+        What the branch cost, after its first orbit: the integrations of the period map
+        (each over ``periods`` excitation periods; residuals, difference quotients,
+        trials that locate special points), counted whatever the machine's speed.
+    replays : int
+        The tangent replays of a kept run (variational equations and saltation matrices
+        along the run's logged events, no integration of the flow).
     """
 
     field: str
@@ -123,6 +130,8 @@ class Branch:
     special: list = field(default_factory=list)
     state_names: list = field(default_factory=list)
     message: str = ""
+    integrations: int = 0
+    replays: int = 0
 
     def points(self, kind: str) -> list:
         """The special points of one kind."""
@@ -148,6 +157,7 @@ class _Family:
             raise ValueError(f"{type(config).__name__} has no field {name!r} to continue in, or {start!r} is not "
                              f"a value it takes: {e}") from None
         self._cache: dict = {}
+        self._dropped = np.zeros(2, dtype=np.int64)   # integrations and replays of maps no longer kept
         self._first = None
         self._bounds = (min(bounds), max(bounds)) if bounds is not None else None
         self._path: AffineFieldPath | None = None
@@ -208,9 +218,17 @@ class _Family:
         key = float(value)
         if key not in self._cache:
             if len(self._cache) > 8:
-                self._cache.pop(next(iter(self._cache)))
+                old = self._cache.pop(next(iter(self._cache)))
+                self._dropped += (old.evaluations, old.replays)
             self._cache[key] = PeriodMap(self._integrator_at(key), self.periods, self.jacobian, self.workers)
         return self._cache[key]
+
+    def work(self) -> tuple[int, int]:
+        """The integrations and tangent replays of every period map made so far."""
+        total = self._dropped.copy()
+        for P in self._cache.values():
+            total += (P.evaluations, P.replays)
+        return int(total[0]), int(total[1])
 
     def _integrator_at(self, value: float):
         """An integrator at ``value``: the first one with the path's parameter values, its parameters taken from
@@ -511,6 +529,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
             break
     else:
         message = f"stopped after max_points = {max_points} points at {name} = {X[-1] * span:.6g}"
+    integrations, replays = fam.work()
     return Branch(field=name, periods=periods, params=np.array([p["param"] for p in pts]),
                   states=np.array([p["state"] for p in pts]), multipliers=np.array([p["mu"] for p in pts]),
                   stable=np.array([p["stable"] for p in pts], dtype=bool),
@@ -518,7 +537,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
                   events=np.array([p["events"] for p in pts], dtype=np.int64),
                   residuals=np.array([p["residual"] for p in pts]),
                   sections=np.array([p["sections"] for p in pts]), special=special, state_names=list(ig.meta["state"][:n]),
-                  message=message)
+                  message=message, integrations=integrations, replays=replays)
 
 
 def _shoot_ahead(ctx, X, direction, mode, fractions=(1e-6, 1e-5, 1e-4, 1e-3), accept=None):

@@ -24,7 +24,8 @@ def save_branch(branch: Branch, path, config=None) -> None:
     Poincare samples per ``point``, ``section`` (``t = k T``) and ``state``
     (DOF names as a string coordinate), the multipliers (real and imaginary parts)
     per ``point`` and ``multiplier``, ``stable``, and the special points (kind,
-    value, multiplier) along ``special``. The file follows CF-1.8: every dimension has
+    value, multiplier) along ``special``; what it cost (``integrations``, ``replays``) in
+    global attributes. The file follows CF-1.8: every dimension has
     its coordinate variable, every variable a ``long_name`` (the field its ``units``,
     from the config's description), the field is an auxiliary coordinate of every
     per-point variable; the config (if given) is stored as JSON in the global
@@ -43,6 +44,8 @@ def save_branch(branch: Branch, path, config=None) -> None:
         ds.field = branch.field
         ds.periods = branch.periods
         ds.message = branch.message
+        ds.integrations = branch.integrations
+        ds.replays = branch.replays
         if config is not None:
             ds.config = json.dumps(config.model_dump(mode="json"))
         ds.createDimension("point", k)
@@ -139,4 +142,5 @@ def load_branch(path) -> Branch:
                       sections=ds["section_samples"][:].data.copy() if "section_samples" in ds.variables
                       else ds["section_state"][:].data[:, None, :].copy(),
                       harmonics=ds["harmonic1_abs"][:].data * np.exp(1j * ds["harmonic1_phase"][:].data),
-                      special=special, state_names=[str(s) for s in ds["state"][:]], message=ds.message)
+                      special=special, state_names=[str(s) for s in ds["state"][:]], message=ds.message,
+                      integrations=int(getattr(ds, "integrations", 0)), replays=int(getattr(ds, "replays", 0)))

@@ -110,7 +110,8 @@ class PeriodMap:
         self.integrator = integrator
         self.periods = int(periods)
         self.n = integrator.n_physical
-        self.evaluations = 0
+        self.evaluations = 0   # integrations of the map (each over ``periods`` excitation periods)
+        self.replays = 0       # tangent replays of a kept run (no integration)
         self.last_events = -1
         self.method = jacobian
         self.exact = jacobian in ("auto", "tangent") and product
@@ -185,6 +186,7 @@ class PeriodMap:
             r = self.run(y, mode)
         except FlowError as e:
             raise SensitivityError(str(e)) from None
+        self.replays += 1
         s = flow_sensitivity(ig, r.start[:self.n], r.mode, self.periods, dp=dp, dperiod=dperiod,
                              run=(r.end, r.mode_end, r.log, r.n_log), record=r.states)
         if r.fired:
