@@ -12,6 +12,17 @@ from blademodel.sweep.point import run_point
 from linear_reference import forced_response
 
 
+def test_one_dft_bin_of_every_column_is_the_fft_s():
+    """``dft_bin`` (a real product with the bin's cosine and sine rows) equals the FFT's bin of each column, for a
+    strided view of a record (the orbit's physical states) and for several bins of the same length."""
+    from blademodel.analysis.spectrum import dft_bin
+    rng = np.random.default_rng(3)
+    record = rng.standard_normal((1001, 13))
+    Y = record[:-1, :9]                       # not contiguous: every row skips four columns
+    for cycles in (1, 2, 7):
+        assert np.allclose(dft_bin(Y, cycles), np.fft.fft(Y, axis=0)[cycles], rtol=0, atol=1e-12)
+
+
 def test_the_amplitude_of_each_harmonic_of_a_sampled_signal():
     """Three whole periods of ``a0 + 2 cos(wt + 0.3) + 0.5 sin(3 wt)`` (and a closing sample): exact amplitudes."""
     S, K = 40, 3

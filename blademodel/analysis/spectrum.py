@@ -66,6 +66,27 @@ def harmonic_amplitudes(Y, samples_per_period: int, k: int = 1) -> np.ndarray:
     Y, S, K = _whole_periods(Y[:, None] if Y.ndim == 1 else Y, samples_per_period)
     if not 0 < k < S / 2:
         raise ValueError(f"harmonic k = {k} must lie between 1 and half the samples per period ({S})")
-    n = np.arange(len(Y))
-    c = np.exp(-2j * np.pi * k * K * n / len(Y)) @ Y   # the one DFT bin of harmonic k, every column
-    return 2 * np.abs(c) / len(Y)
+    return 2 * np.abs(dft_bin(Y, k * K)) / len(Y)
+
+
+_BINS: dict = {}
+
+
+def dft_bin(Y, cycles: int) -> np.ndarray:
+    """``sum_j Y[j] exp(-2 pi i cycles j / m)`` for each column of ``Y`` (``m`` rows): one bin of the DFT.
+
+    One real product with the bin's cosine and sine rows (kept per ``m`` and ``cycles``):
+    numpy multiplies a complex row by a real matrix without BLAS, about ten times slower
+    (measured: 372 against 32 us for 1000 samples of 9 states, a third of a continuation
+    point's time).
+    """
+    Y = np.asarray(Y, dtype=float)
+    key = (Y.shape[0], int(cycles))
+    W = _BINS.get(key)
+    if W is None:
+        if len(_BINS) > 32:
+            _BINS.clear()
+        a = 2.0 * np.pi * key[1] * np.arange(key[0]) / key[0]
+        W = _BINS[key] = np.vstack([np.cos(a), -np.sin(a)])
+    re, im = W @ Y
+    return re + 1j * im

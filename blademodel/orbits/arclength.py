@@ -38,6 +38,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..analysis.spectrum import dft_bin
 from .field_path import AffineFieldPath
 from .period_map import FlowError, PeriodMap, _copy, _key, worker_count
 from .shooting import _n_coordinates, _orbit_samples, _same, _state_scale, find_periodic_orbit
@@ -855,7 +856,7 @@ class _Context:
         Y = r.Y
         residual = float(np.max(np.abs(r.end[:self.n] - y) / self.scale))
         amp = 0.5 * (Y.max(axis=0) - Y.min(axis=0))
-        c = _fourier_row(Y.shape[0] - 1, self.fam.periods) @ Y[:-1] * 2.0 / (Y.shape[0] - 1)
+        c = dft_bin(Y[:-1], self.fam.periods) * 2.0 / (Y.shape[0] - 1)
         S = P.integrator.steps_per_period
         n = self.n
         return {"param": lam, "state": y, "sections": Y[:-1:S].copy(), "mu": mu, "stable": bool(np.max(np.abs(mu)) < 1.0), "amp": amp,
@@ -1012,17 +1013,6 @@ class _Context:
             if Xb is not None and A is not None:
                 return self.point(Xb, mb, A)
         return b
-
-
-_FOURIER: dict = {}
-
-
-def _fourier_row(m: int, k: int) -> np.ndarray:
-    """``exp(-2 pi i k j / m)``, ``j = 0 .. m - 1``: the ``k``-th coefficient of an ``m``-sample DFT as one
-    product (the branch needs one harmonic per point, not the whole transform)."""
-    if (m, k) not in _FOURIER:
-        _FOURIER[(m, k)] = np.exp(-2j * np.pi * k * np.arange(m) / m)
-    return _FOURIER[(m, k)]
 
 
 def _special(kind: str, point: dict, index: int, multiplier=None) -> SpecialPoint:
