@@ -979,8 +979,10 @@ class _Context:
         close at all. A trial only has to tell on which side of the grazing point it
         lies, so it is solved to :data:`TRIAL_ACCURACY` of the bracket's width (never
         looser than the branch's ``tol`` needs less): where the bracket is wide, one or
-        two corrections. The located point is solved to ``tol`` and alone gets its
-        Jacobian.
+        two corrections, by Broyden's method alone, from the Jacobian of the end nearer
+        the trial (``a``'s up to the bracket's middle, ``b``'s past it); a trial that
+        fails is tried beside. The located point is solved to ``tol`` and alone gets
+        its Jacobian.
         """
         X_lo, X_hi = Xa, b["X"]
         best = None
