@@ -383,10 +383,10 @@ def test_a_grazing_where_an_arm_ends_is_located_to_the_tolerance_in_the_field():
     near, far = b.events[g.index], b.events[-1]
     assert (near, far) == (22, 20) and 313.1141 < g.param < 313.1143
 
-    def orbit(w, guess, mode):
-        model = cfg.model_copy(update={"omega": float(w)}).build()
-        o = find_periodic_orbit(model, guess=guess, mode=mode, transient=0)
-        P = PeriodMap(make_integrator(model))
+    def orbit(w, guess, mode):   # the orbit at w from the guess, and its events a period
+        ig = make_integrator(cfg.model_copy(update={"omega": float(w)}).build())
+        o = find_periodic_orbit(None, integrator=ig, guess=guess, mode=mode, transient=0)
+        P = PeriodMap(ig)
         P(o.state, o.mode)
         return o, P.last_events
 

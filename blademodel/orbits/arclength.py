@@ -158,7 +158,7 @@ class _Family:
             raise ValueError(f"{type(config).__name__} has no field {name!r} to continue in, or {start!r} is not "
                              f"a value it takes: {e}") from None
         self._cache: dict = {}
-        self._dropped = np.zeros(2, dtype=np.int64)   # integrations and replays of maps no longer kept
+        self._dropped = (0, 0)   # integrations and replays of the maps no longer kept
         self._first = None
         self._bounds = (min(bounds), max(bounds)) if bounds is not None else None
         self._path: AffineFieldPath | None = None
@@ -220,16 +220,15 @@ class _Family:
         if key not in self._cache:
             if len(self._cache) > 8:
                 old = self._cache.pop(next(iter(self._cache)))
-                self._dropped += (old.evaluations, old.replays)
+                self._dropped = (self._dropped[0] + old.evaluations, self._dropped[1] + old.replays)
             self._cache[key] = PeriodMap(self._integrator_at(key), self.periods, self.jacobian, self.workers)
         return self._cache[key]
 
     def work(self) -> tuple[int, int]:
         """The integrations and tangent replays of every period map made so far."""
-        total = self._dropped.copy()
-        for P in self._cache.values():
-            total += (P.evaluations, P.replays)
-        return int(total[0]), int(total[1])
+        maps = self._cache.values()
+        return (self._dropped[0] + sum(P.evaluations for P in maps),
+                self._dropped[1] + sum(P.replays for P in maps))
 
     def _integrator_at(self, value: float):
         """An integrator at ``value``: the first one with the path's parameter values, its parameters taken from
