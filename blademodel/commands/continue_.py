@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import signal
 import sys
+from contextlib import contextmanager
+from pathlib import Path
 
 import numpy as np
 
-from ..orbits import FlowError, ShootingError, continuation, period_doubled_branch
+from ..orbits import ContinuationInterrupted, FlowError, ShootingError, continuation, period_doubled_branch
 from ..progress import Progress
 from . import jsonout
 from .common import (add_jacobian_arguments, add_model_arguments, add_stepping_arguments, check_at_least_one,
@@ -48,6 +53,15 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(run=run)
     return p
+
+
+#: Seconds between two saves of an unfinished branch to ``--out`` (``$BLADEMODEL_CHECKPOINT_SECONDS``, default 30).
+CHECKPOINT_SECONDS = float(os.environ.get("BLADEMODEL_CHECKPOINT_SECONDS", 30.0))
+
+#: The options that shape a branch (``--workers`` does not: the branch is the same to the bit): a file made with
+#: the same ones, and the same config, is this command's own.
+_RUN_OPTIONS = ("param", "start", "stop", "period", "transient", "max_points", "ds_max", "steps_per_period",
+                "event_tol", "method", "jacobian")
 
 
 def _reporter(label: str, param: str):
@@ -102,46 +116,42 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError("--overlay holds first harmonics: use it with --quantity harmonic")
         sweep_overlay(args.overlay, args.param, 0)   # the file's checks, before the continuation
     config, _ = config_and_model(args)
-    try:
-        branch = continuation(config, args.param, args.start, args.stop, periods=args.period,
-                              transient=args.transient, max_points=args.max_points, ds_max=args.ds_max,
-                              steps_per_period=args.steps_per_period, event_tol=args.event_tol, method=args.method,
-                              jacobian=args.jacobian, workers=args.workers,
-                              progress=(progress := _reporter("branch", args.param)))
-    except (ShootingError, FlowError) as e:
-        progress.interrupt()
-        print(f"error: {e}", file=sys.stderr)
-        return 1
-    progress.interrupt()
-    doubled = []
-    if args.switch:
-        for k, pd in enumerate(branch.points("period-doubling"), 1):
-            try:
-                doubled.append(period_doubled_branch(
-                    config, args.param, pd, args.start, args.stop, periods=args.period, max_points=args.max_points,
-                    ds_max=args.ds_max, steps_per_period=args.steps_per_period, event_tol=args.event_tol,
-                    method=args.method, jacobian=args.jacobian, workers=args.workers,
-                    progress=(progress := _reporter(f"period-doubled branch {k}", args.param))))
-            except (ShootingError, FlowError) as e:
-                progress.interrupt()
-                print(f"warning: no switch at the period doubling {k} ({args.param} = {pd.param:.6g}): {e}",
-                      file=sys.stderr)
-                doubled.append(None)
-            progress.interrupt()
+    run_settings = {k: getattr(args, k) for k in _RUN_OPTIONS}
+    shared = dict(max_points=args.max_points, ds_max=args.ds_max, steps_per_period=args.steps_per_period,
+                  event_tol=args.event_tol, method=args.method, jacobian=args.jacobian, workers=args.workers)
+    with _interrupts() as interrupts:
+        try:
+            branch = _continued(args.out, config, run_settings, "branch", args.param, interrupts,
+                                lambda resume, **kw: continuation(
+                config, args.param, args.start, args.stop, periods=args.period, transient=args.transient,
+                resume=resume, **shared, **kw))
+        except (ShootingError, FlowError) as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 1
+        doubled, doubled_files = [], []
+        if args.switch:
+            for k, pd in enumerate(branch.points("period-doubling"), 1):
+                name = str(Path(args.out).with_name(f"{Path(args.out).stem}_pd{k}.nc")) if args.out else None
+
+                def switched(resume, pd=pd, **kw):
+                    if resume is not None:   # an unfinished period-doubled branch goes on as any branch
+                        return continuation(config, args.param, args.start, args.stop, periods=2 * args.period,
+                                            resume=resume, **shared, **kw)
+                    return period_doubled_branch(config, args.param, pd, args.start, args.stop, periods=args.period,
+                                                 **shared, **kw)
+                try:
+                    doubled.append(_continued(name, config, {**run_settings, "doubling": k},
+                                              f"period-doubled branch {k}", args.param, interrupts, switched))
+                except (ShootingError, FlowError) as e:
+                    print(f"warning: no switch at the period doubling {k} ({args.param} = {pd.param:.6g}): {e}",
+                          file=sys.stderr)
+                    doubled.append(None)
+                    continue
+                if name:
+                    doubled_files.append(name)
     state = args.state or branch.state_names[0]
     if state not in branch.state_names:
         raise ValueError(f"--state {state!r}: not a state of the model ({', '.join(branch.state_names)})")
-    doubled_files = []
-    if args.out:
-        from pathlib import Path
-
-        from ..orbits.branch_file import save_branch
-        save_branch(branch, args.out, config)
-        for k, b in enumerate(doubled, 1):
-            if b is not None:
-                name = str(Path(args.out).with_name(f"{Path(args.out).stem}_pd{k}.nc"))
-                save_branch(b, name, config)
-                doubled_files.append(name)
     if args.plot:
         from ..plots.branch import branch_figure
         overlay = None
@@ -183,3 +193,97 @@ def run(args: argparse.Namespace) -> int:
         if name:
             print(f"{what} {name}")
     return 0
+
+
+def _continued(path, config, run_settings: dict, label: str, param: str, interrupts, follow):
+    """The branch ``follow(resume=..., checkpoint=..., checkpoint_every=..., progress=...)`` continues, saved to
+    ``path`` (if given) every :data:`CHECKPOINT_SECONDS` and at the end (``interrupts`` deferred meanwhile).
+
+    If ``path`` holds this branch (the same ``run_settings`` and config) unfinished, it is resumed; finished, it is
+    read back instead of computed again. On Ctrl-C (or SIGTERM) the points found are saved, and a
+    :class:`KeyboardInterrupt` says where and how to resume.
+    """
+    from ..orbits.branch_file import save_branch
+    stored = _own_branch(path, config, run_settings)
+    if stored is not None and stored.complete:
+        print(f"{path} holds this {label}, finished ({len(stored.params)} points): read back, not computed again "
+              f"(remove the file to compute it again)", file=sys.stderr)
+        return stored
+    if stored is not None:
+        print(f"resuming the {label} saved in {path}: {len(stored.params)} points, the last at {param} = "
+              f"{stored.params[-1]:.6g}", file=sys.stderr)
+    progress = _reporter(label, param)
+
+    def save(branch):
+        with interrupts.deferred():
+            save_branch(branch, path, config, run_settings)
+
+    try:
+        branch = follow(resume=stored, checkpoint=save if path else None, checkpoint_every=CHECKPOINT_SECONDS,
+                        progress=progress)
+    except ContinuationInterrupted as e:
+        progress.interrupt()
+        if path is None:
+            raise KeyboardInterrupt(f"interrupted: the {len(e.branch.params)} points of the {label} are lost (give "
+                                    f"--out FILE.nc to keep them and resume)") from None
+        save(e.branch)
+        raise KeyboardInterrupt(f"interrupted: {len(e.branch.params)} points of the {label} are saved in {path}; "
+                                f"run the same command again to resume") from None
+    finally:
+        progress.interrupt()
+    if path is not None:
+        save(branch)
+    return branch
+
+
+def _own_branch(path, config, run_settings: dict):
+    """The branch in ``path`` if that file holds a branch made by the same options and config, else None."""
+    from ..orbits.branch_file import branch_origin, load_branch
+    if path is None:
+        return None
+    run, stored_config = branch_origin(path)
+    if run != json.loads(json.dumps(run_settings)) or stored_config != config.model_dump(mode="json"):
+        return None
+    return load_branch(path)
+
+
+class _Interrupts:
+    """Ctrl-C and SIGTERM (``kill``, a batch system's time limit) raised as :class:`KeyboardInterrupt`, except while a
+    file is written (:meth:`deferred`): an exception raised inside netCDF4's compiled code is lost (measured: the
+    run went on to its end), so there it is raised once the file is complete."""
+
+    def __init__(self):
+        self.deferring = self.pending = False
+
+    def __call__(self, signum, frame):
+        if self.deferring:
+            self.pending = True
+            return
+        raise KeyboardInterrupt
+
+    @contextmanager
+    def deferred(self):
+        self.deferring = True
+        try:
+            yield
+        finally:
+            self.deferring = False
+        if self.pending:
+            self.pending = False
+            raise KeyboardInterrupt
+
+
+@contextmanager
+def _interrupts():
+    """An :class:`_Interrupts` handling SIGINT and SIGTERM meanwhile (signals untouched off the main thread)."""
+    handler = _Interrupts()
+    try:
+        before = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    except ValueError:   # not the main thread (the command run from a thread): signals stay as they are
+        yield handler
+        return
+    try:
+        yield handler
+    finally:
+        for s, h in before.items():
+            signal.signal(s, h)

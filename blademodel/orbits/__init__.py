@@ -13,9 +13,9 @@ config field; :func:`period_doubled_branch` switches to the branch born at a per
 doubling.
 """
 
-from .arclength import Branch, SpecialPoint, continuation, period_doubled_branch
+from .arclength import Branch, ContinuationInterrupted, SpecialPoint, continuation, period_doubled_branch
 from .period_map import FlowError, PeriodMap
 from .shooting import PeriodicOrbit, ShootingError, find_periodic_orbit
 
-__all__ = ["Branch", "FlowError", "PeriodMap", "PeriodicOrbit", "ShootingError", "SpecialPoint", "continuation",
-           "find_periodic_orbit", "period_doubled_branch"]
+__all__ = ["Branch", "ContinuationInterrupted", "FlowError", "PeriodMap", "PeriodicOrbit", "ShootingError",
+           "SpecialPoint", "continuation", "find_periodic_orbit", "period_doubled_branch"]

@@ -115,6 +115,14 @@ class Branch:
     replays : int
         The tangent replays of a kept run (variational equations and saltation matrices
         along the run's logged events, no integration of the flow).
+    modes : ndarray of int, shape (points, width)
+        Each orbit's hybrid mode at the section: one entry on the product-mode kernel,
+        one per contact on the per-contact kernel (what a resumed continuation starts
+        its first orbit in); ``-1`` where unknown (points from a file written before
+        modes were kept).
+    complete : bool
+        False for a branch saved or returned before its continuation ended (a
+        checkpoint, or after Ctrl-C): :func:`continuation` resumes it (``resume``).
     """
 
     field: str
@@ -133,10 +141,24 @@ class Branch:
     message: str = ""
     integrations: int = 0
     replays: int = 0
+    modes: np.ndarray = field(default_factory=lambda: np.zeros((0, 1), dtype=np.int64))
+    complete: bool = True
 
     def points(self, kind: str) -> list:
         """The special points of one kind."""
         return [p for p in self.special if p.kind == kind]
+
+
+class ContinuationInterrupted(KeyboardInterrupt):
+    """Ctrl-C (or a signal raised as one) during a continuation; ``branch`` holds the points found.
+
+    A :class:`KeyboardInterrupt`, so it stops a program as Ctrl-C does; the branch
+    (``complete`` False) can be saved, drawn, or passed back as ``resume``.
+    """
+
+    def __init__(self, message: str, branch: Branch):
+        super().__init__(message)
+        self.branch = branch
 
 
 class _Family:
@@ -254,7 +276,9 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
                  max_points: int = 400, tol: float = 1e-10, max_corrections: int = 8, rel_step: float = 1e-6,
                  locate_tol: float = 1e-7, steps_per_period: int = 1000, event_tol: float = 1e-10,
                  method: str = "rk4", kernel: str = "auto", jacobian: str = "auto", workers: int | None = None,
-                 progress: Callable[[int, float], None] | None = None) -> Branch:
+                 progress: Callable[[int, float], None] | None = None,
+                 checkpoint: Callable[[Branch], None] | None = None, checkpoint_every: float = 30.0,
+                 resume: Branch | None = None) -> Branch:
     """Follow the periodic orbits of ``config`` as its field ``name`` goes from ``start`` toward ``stop``.
 
     Parameters
@@ -273,7 +297,7 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
     ds, ds_min, ds_max : float
         Arclength step, in units of the scaled state and of the range ``|stop - start|``.
     max_points : int
-        Points at most.
+        Points at most (a resumed branch's included).
     tol : float
         Scaled residual of each corrected point.
     max_corrections : int
@@ -293,18 +317,46 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         same to the bit whatever the number.
     progress : callable, optional
         ``progress(point, value)`` after each point.
+    checkpoint : callable, optional
+        ``checkpoint(branch)`` with the branch so far (``complete`` False), after a point,
+        once ``checkpoint_every`` seconds have passed since the start or the last call: to
+        save it, so that a run that is killed keeps its points.
+    checkpoint_every : float
+        Seconds between two checkpoints.
+    resume : Branch, optional
+        An unfinished branch of the same field, period and range (a checkpoint, or the
+        ``branch`` of :class:`ContinuationInterrupted`, e.g. from
+        :func:`~blademodel.orbits.branch_file.load_branch`): the continuation starts
+        from its last orbit (shot again, from its state and mode), along the secant
+        of its last two points, and the branch returned holds its points, special
+        points and cost before the new ones. The steps after it are not those the
+        interrupted run would have taken (the step length starts again from ``ds``).
 
     Returns
     -------
     Branch
+
+    Raises
+    ------
+    ContinuationInterrupted
+        On Ctrl-C (a :class:`KeyboardInterrupt`), with the branch so far.
+    ValueError
+        If ``resume`` is not a branch of ``name`` with ``periods`` that lies in the range.
     """
     settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
-    fam = _Family(config, name, periods, settings, start, jacobian, bounds=(start, stop), workers=workers)
     span = abs(stop - start)
     if not span > 0:
         raise ValueError(f"start and stop must differ, got {start!r} and {stop!r}")
     direction = 1.0 if stop > start else -1.0
-    P0 = fam.map_at(start)
+    at = start
+    if resume is not None:
+        _check_resumable(resume, name, periods, start, stop)
+        at, guess = float(resume.params[-1]), resume.states[-1]
+    fam = _Family(config, name, periods, settings, at, jacobian, bounds=(start, stop), workers=workers)
+    P0 = fam.map_at(at)
+    if resume is not None and resume.modes.shape[0] == resume.params.size and resume.modes.shape[1] > 0 \
+            and np.all(resume.modes[-1] >= 0):
+        mode = _mode_from_row(resume.modes[-1], P0.integrator)
     first = find_periodic_orbit(None, periods=periods, guess=guess, mode=mode, transient=transient, tol=tol,
                                 rel_step=rel_step, integrator=P0.integrator, jacobian=jacobian, workers=workers)
     scale = first.scale
@@ -312,12 +364,40 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
     ctx = _Context(fam, scale, span, tol, rel_step, max_corrections)
 
     # scaled unknowns X = (y / scale, lambda / span)
-    X = np.append(first.state / scale, start / span)
+    X = np.append(first.state / scale, at / span)
     m = first.mode
     A = ctx.jacobian(X, m)
-    T = _tangent(A, np.append(np.zeros(n), direction))
-    return _follow(ctx, [ctx.point(X, m, A)], X, T, m, A, (start, stop), ds=ds, ds_min=ds_min, ds_max=ds_max,
-                   max_points=max_points, locate_tol=locate_tol, progress=progress)
+    if resume is not None and resume.params.size > 1:   # onward along the secant of its last two points
+        T = _tangent(A, X - np.append(resume.states[-2] / scale, resume.params[-2] / span))
+    else:
+        T = _tangent(A, np.append(np.zeros(n), direction))
+    return _run(ctx, [ctx.point(X, m, A)], X, T, m, A, (start, stop), ds=ds, ds_min=ds_min, ds_max=ds_max,
+                max_points=max_points, locate_tol=locate_tol, progress=progress, checkpoint=checkpoint,
+                checkpoint_every=checkpoint_every, before=resume)
+
+
+def _check_resumable(branch: Branch, name: str, periods: int, start: float, stop: float) -> None:
+    """Raise ``ValueError`` (naming what differs) unless ``branch`` can be resumed by this continuation."""
+    if branch.field != name or branch.periods != periods:
+        raise ValueError(f"resume: the branch was continued in {branch.field!r} with period {branch.periods}, "
+                         f"not in {name!r} with period {periods}")
+    if branch.params.size == 0:
+        raise ValueError("resume: the branch has no points")
+    lo, hi = min(start, stop), max(start, stop)
+    last = float(branch.params[-1])
+    if not lo <= last <= hi:
+        raise ValueError(f"resume: the branch's last point, {name} = {last:g}, lies outside [{lo:g}, {hi:g}]")
+
+
+def _mode_from_row(row, integrator):
+    """A mode as the kernel takes it from its row in :attr:`Branch.modes`."""
+    row = np.asarray(row, dtype=np.int64)
+    return row.copy() if getattr(integrator, "kernel", "") == "contact" else int(row[0])
+
+
+def _mode_row(mode) -> np.ndarray:
+    """A mode as a row of :attr:`Branch.modes`."""
+    return np.atleast_1d(np.asarray(mode, dtype=np.int64)).copy()
 
 
 def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, stop: float, *,
@@ -326,7 +406,9 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
                           rel_step: float = 1e-6, locate_tol: float = 1e-7, steps_per_period: int = 1000,
                           event_tol: float = 1e-10, method: str = "rk4", kernel: str = "auto",
                           jacobian: str = "auto", workers: int | None = None,
-                          progress: Callable[[int, float], None] | None = None) -> Branch:
+                          progress: Callable[[int, float], None] | None = None,
+                          checkpoint: Callable[[Branch], None] | None = None,
+                          checkpoint_every: float = 30.0) -> Branch:
     """The branch of period-``2 periods`` orbits born at a period doubling of a period-``periods`` branch.
 
     At a period doubling the map over ``periods`` excitation periods has the multiplier
@@ -352,13 +434,14 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
         Period of the *old* branch; the new one has twice it.
     ds, ds_min, ds_max, max_points, tol, max_corrections, rel_step, locate_tol : float
         As for :func:`continuation`; ``ds`` is also the switch's step along ``v``.
-    steps_per_period, event_tol, method, kernel, jacobian, workers, progress
+    steps_per_period, event_tol, method, kernel, jacobian, workers, progress, checkpoint, checkpoint_every
         As for :func:`continuation`.
 
     Returns
     -------
     Branch
-        With ``periods`` twice the old branch's.
+        With ``periods`` twice the old branch's; resumed, if unfinished, by
+        :func:`continuation` with ``periods`` twice the old branch's and ``start, stop``.
 
     Raises
     ------
@@ -366,6 +449,8 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
         If ``point`` is not a period doubling, or lies outside ``[start, stop]``.
     FlowError
         If the switch converges back onto the old orbits for both signs of ``v``.
+    ContinuationInterrupted
+        On Ctrl-C, with the branch so far.
     """
     if point.kind != "period-doubling":
         raise ValueError(f"point must be a period-doubling point, got a {point.kind!r} point")
@@ -409,23 +494,84 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
     pts = [ctx.point(X0, mode, A0), ctx.point(X1, m1, A1)]
     X, T, A = ctx.rescale(_state_scale(pts[-1]["Y"], _n_coordinates(ig)), X1, T1, A1)
     pts[-1]["X"], pts[-1]["A"] = X, A
-    return _follow(ctx, pts, X, T, m1, A, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points,
-                   locate_tol=locate_tol, progress=progress)
+    return _run(ctx, pts, X, T, m1, A, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points,
+                locate_tol=locate_tol, progress=progress, checkpoint=checkpoint, checkpoint_every=checkpoint_every)
 
 
-def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, locate_tol, progress) -> Branch:
-    """Continue from the last point ``pts[-1]`` (unknowns ``X``, tangent ``T``) until the field leaves ``bounds``."""
+def _run(ctx, pts, X, T, m, A, bounds, *, progress, checkpoint, checkpoint_every, before=None, **follow) -> Branch:
+    """:func:`_follow` into a :class:`Branch` (after the points of ``before``), with checkpoints and Ctrl-C."""
+    import time
+    special: list = []
+    last = [time.monotonic()]
+
+    def report(point: int, value: float) -> None:
+        if progress is not None:
+            progress(point, value)
+        if checkpoint is not None and time.monotonic() - last[0] >= checkpoint_every:
+            checkpoint(_assemble(ctx, pts, special, f"in progress at {ctx.fam.name} = {value:.6g}", before, False))
+            last[0] = time.monotonic()
+
+    earlier = 0 if before is None else before.params.size - 1
+    try:
+        message = _follow(ctx, pts, special, X, T, m, A, bounds, progress=report, earlier=earlier, **follow)
+    except KeyboardInterrupt:
+        where = f"{ctx.fam.name} = {pts[-1]['param']:.6g}"
+        raise ContinuationInterrupted(f"interrupted at {where} after {earlier + len(pts)} points",
+                                      _assemble(ctx, pts, special, f"interrupted at {where}", before, False)) from None
+    return _assemble(ctx, pts, special, message, before, True)
+
+
+def _assemble(ctx, pts, special, message: str, before: Branch | None, complete: bool) -> Branch:
+    """The branch of the points ``pts`` and ``special`` points, after those of ``before`` (whose last point is
+    ``pts[0]`` found again)."""
+    fam = ctx.fam
+    integrations, replays = fam.work()
+    ig = fam.map_at(pts[-1]["param"]).integrator
+    b = Branch(field=fam.name, periods=fam.periods, params=np.array([p["param"] for p in pts]),
+               states=np.array([p["state"] for p in pts]), multipliers=np.array([p["mu"] for p in pts]),
+               stable=np.array([p["stable"] for p in pts], dtype=bool),
+               amplitudes=np.array([p["amp"] for p in pts]), harmonics=np.array([p["h1"] for p in pts]),
+               events=np.array([p["events"] for p in pts], dtype=np.int64),
+               residuals=np.array([p["residual"] for p in pts]),
+               sections=np.array([p["sections"] for p in pts]), special=list(special),
+               state_names=list(ig.meta["state"][:ctx.n]), message=message, integrations=integrations,
+               replays=replays, modes=np.array([_mode_row(p["mode"]) for p in pts]), complete=complete)
+    if before is None:
+        return b
+    k = before.params.size - 1   # before's last point is this run's first
+    # modes unknown (a file written before they were kept): -1
+    modes = before.modes if before.modes.shape == (k + 1, b.modes.shape[1]) else \
+        np.full((k + 1, b.modes.shape[1]), -1, dtype=np.int64)
+
+    def joined(a, c):
+        return np.concatenate([np.asarray(a)[:k], c])
+
+    return replace(b, params=joined(before.params, b.params), states=joined(before.states, b.states),
+                   multipliers=joined(before.multipliers, b.multipliers), stable=joined(before.stable, b.stable),
+                   amplitudes=joined(before.amplitudes, b.amplitudes), harmonics=joined(before.harmonics, b.harmonics),
+                   events=joined(before.events, b.events), residuals=joined(before.residuals, b.residuals),
+                   sections=joined(before.sections, b.sections), modes=joined(modes, b.modes),
+                   special=list(before.special) + [replace(q, index=q.index + k) for q in special],
+                   integrations=before.integrations + integrations, replays=before.replays + replays)
+
+
+def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, locate_tol, progress,
+            earlier: int = 0) -> str:
+    """Continue from the last point ``pts[-1]`` (unknowns ``X``, tangent ``T``) until the field leaves ``bounds``.
+
+    Appends the points to ``pts`` and the special points to ``special`` as it finds them;
+    returns why it stopped. ``earlier`` points before ``pts`` (a resumed branch's) count
+    toward ``max_points``, and progress reports the total.
+    """
     fam, span = ctx.fam, ctx.span
-    name, periods = fam.name, fam.periods
+    name = fam.name
     ig = fam.map_at(X[-1] * span).integrator
-    n = ctx.n
     n_q = _n_coordinates(ig)
     lo, hi = min(bounds), max(bounds)
-    special: list = []
     h = ds
     message = f"left [{lo:g}, {hi:g}] in {name}"
     jumped = ahead = switched = False
-    while len(pts) < max_points:
+    while earlier + len(pts) < max_points:
         X_pred, A_pred = ctx.predict(pts, X, T, A, h)
         X_new, m_new, A_new = ctx.correct(X_pred, T, m, A_pred)
         secant = False
@@ -521,7 +667,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
         m = m_new
         h = min(h * 1.5, ds_max) if iterations <= 4 else (h if iterations <= 8 else h / 2)
         if progress is not None:
-            progress(len(pts), X[-1] * span)
+            progress(earlier + len(pts), X[-1] * span)
         lam = X[-1] * span
         if lam > hi + 1e-12 * span or lam < lo - 1e-12 * span:
             if bounds[1] in (lo, hi) and (lam > hi if bounds[1] == hi else lam < lo):
@@ -529,15 +675,7 @@ def _follow(ctx, pts, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, loc
             break
     else:
         message = f"stopped after max_points = {max_points} points at {name} = {X[-1] * span:.6g}"
-    integrations, replays = fam.work()
-    return Branch(field=name, periods=periods, params=np.array([p["param"] for p in pts]),
-                  states=np.array([p["state"] for p in pts]), multipliers=np.array([p["mu"] for p in pts]),
-                  stable=np.array([p["stable"] for p in pts], dtype=bool),
-                  amplitudes=np.array([p["amp"] for p in pts]), harmonics=np.array([p["h1"] for p in pts]),
-                  events=np.array([p["events"] for p in pts], dtype=np.int64),
-                  residuals=np.array([p["residual"] for p in pts]),
-                  sections=np.array([p["sections"] for p in pts]), special=special, state_names=list(ig.meta["state"][:n]),
-                  message=message, integrations=integrations, replays=replays)
+    return message
 
 
 def _shoot_ahead(ctx, X, direction, mode, fractions=(1e-6, 1e-5, 1e-4, 1e-3), accept=None):

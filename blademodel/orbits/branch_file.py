@@ -16,7 +16,7 @@ from .arclength import Branch, SpecialPoint
 KIND = "branch"
 
 
-def save_branch(branch: Branch, path, config=None) -> None:
+def save_branch(branch: Branch, path, config=None, run: dict | None = None) -> None:
     """Write ``branch`` to the NetCDF file ``path`` (written whole, then moved into place).
 
     Variables: the field's value per ``point`` (a coordinate), the section state,
@@ -29,7 +29,11 @@ def save_branch(branch: Branch, path, config=None) -> None:
     its coordinate variable, every variable a ``long_name`` (the field its ``units``,
     from the config's description), the field is an auxiliary coordinate of every
     per-point variable; the config (if given) is stored as JSON in the global
-    attribute ``config``.
+    attribute ``config``, and ``run`` (the settings that made the branch, so that a
+    re-run can tell its own unfinished file) in ``run``. Each orbit's hybrid mode at
+    the section (``section_mode``, per ``point`` and ``mode_entry``) and the global
+    attribute ``complete`` (0 for a checkpoint or an interrupted run) let a
+    continuation resume from the file.
     """
     path = Path(path)
     tmp = path.with_name(path.name + ".tmp")
@@ -46,15 +50,23 @@ def save_branch(branch: Branch, path, config=None) -> None:
         ds.message = branch.message
         ds.integrations = branch.integrations
         ds.replays = branch.replays
+        ds.complete = int(branch.complete)
         if config is not None:
             ds.config = json.dumps(config.model_dump(mode="json"))
+        if run is not None:
+            ds.run = json.dumps(run, sort_keys=True)
         ds.createDimension("point", k)
         ds.createDimension("state", n)
         ds.createDimension("multiplier", n)
         ds.createDimension("special", len(branch.special))
         ds.createDimension("section", branch.periods)
+        modes = branch.modes.shape[0] == k and branch.modes.shape[1] > 0   # unknown in files written before
+        if modes:
+            ds.createDimension("mode_entry", branch.modes.shape[1])
         for dim, long in (("point", "index of the orbit along the branch"),
                           ("section", "index k of the Poincare sample at t = k T"),
+                          *([("mode_entry", "entry of the hybrid mode (one per contact on the per-contact kernel)")]
+                            if modes else []),
                           ("multiplier", "index of the Floquet multiplier, largest modulus first"),
                           ("special", "index of the special point")):
             v = ds.createVariable(dim, "i8", (dim,))
@@ -84,6 +96,10 @@ def save_branch(branch: Branch, path, config=None) -> None:
             v = ds.createVariable(name, "f8", ("point", "multiplier"))
             v[:] = data
             v.long_name = "Floquet multipliers, largest modulus first"
+        if modes:
+            v = ds.createVariable("section_mode", "i8", ("point", "mode_entry"))
+            v[:] = branch.modes
+            v.long_name = "hybrid mode of the orbit at t = 0 (the kernel's mode number, or each contact's)"
         v = ds.createVariable("events", "i8", ("point",))
         v[:] = branch.events
         v.long_name = "events per orbit"
@@ -143,4 +159,16 @@ def load_branch(path) -> Branch:
                       else ds["section_state"][:].data[:, None, :].copy(),
                       harmonics=ds["harmonic1_abs"][:].data * np.exp(1j * ds["harmonic1_phase"][:].data),
                       special=special, state_names=[str(s) for s in ds["state"][:]], message=ds.message,
-                      integrations=int(getattr(ds, "integrations", 0)), replays=int(getattr(ds, "replays", 0)))
+                      integrations=int(getattr(ds, "integrations", 0)), replays=int(getattr(ds, "replays", 0)),
+                      modes=ds["section_mode"][:].data.astype(np.int64) if "section_mode" in ds.variables
+                      else np.zeros((0, 1), dtype=np.int64),
+                      complete=bool(getattr(ds, "complete", 1)))
+
+
+def branch_origin(path) -> tuple[dict | None, dict | None]:
+    """The ``run`` settings and the config stored in a branch file (None for what it lacks, or if it is none)."""
+    if not Path(path).is_file() or not is_branch_file(path):
+        return None, None
+    with netCDF4.Dataset(path) as ds:
+        attrs = ds.ncattrs()
+        return (json.loads(ds.run) if "run" in attrs else None, json.loads(ds.config) if "config" in attrs else None)
