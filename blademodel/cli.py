@@ -74,9 +74,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         every point failed), 130 after Ctrl-C. Messages are printed to stderr
         as ``error: ...``, without a traceback.
     """
+    from . import interrupts
     try:
         args = build_parser().parse_args(argv)
-        return int(args.run(args) or 0)
+        with interrupts.handled():   # Ctrl-C and SIGTERM raise KeyboardInterrupt, never lost
+            return int(args.run(args) or 0)
     except KeyboardInterrupt as e:  # Ctrl-C: one line (a sweep's says how to resume), no traceback
         print(("\n" if sys.stderr.isatty() else "") + (str(e) or "interrupted"), file=sys.stderr)
         return EXIT_INTERRUPTED

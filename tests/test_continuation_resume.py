@@ -73,6 +73,28 @@ def test_an_interrupted_continuation_resumes_onto_the_same_branch(full, tmp_path
     assert np.array_equal(again.params, resumed.params) and np.array_equal(again.states, resumed.states)
 
 
+def test_a_ctrl_c_that_compiled_code_swallowed_stops_the_continuation_at_the_next_point(full):
+    """With the command line's handlers (:func:`blademodel.interrupts.handled`), a signal whose exception was
+    dropped (raised inside netCDF4's or llvmlite's compiled code) still stops the branch, one point later."""
+    import threading
+
+    from blademodel import interrupts
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("signal handlers are set on the main thread only")
+
+    def progress(k, value):
+        if k == 6:
+            try:
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(5)
+            except KeyboardInterrupt:
+                pass
+
+    with interrupts.handled(), pytest.raises(ContinuationInterrupted) as e:
+        continuation(BladePair(friction="bilinear"), "omega", START, STOP, workers=1, progress=progress)
+    assert np.array_equal(e.value.branch.params, full.params[:7])
+
+
 def test_a_ring_resumes_in_the_contact_modes_it_was_saved_in(tmp_path):
     """On the per-contact kernel a mode is an array, one entry per contact: saved per point, it starts the resumed
     run's first orbit, which is the interrupted run's last one again."""

@@ -5,13 +5,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import signal
 import sys
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
+from .. import interrupts
 from ..orbits import ContinuationInterrupted, FlowError, ShootingError, continuation, period_doubled_branch
 from ..progress import Progress
 from . import jsonout
@@ -119,36 +118,37 @@ def run(args: argparse.Namespace) -> int:
     run_settings = {k: getattr(args, k) for k in _RUN_OPTIONS}
     shared = dict(max_points=args.max_points, ds_max=args.ds_max, steps_per_period=args.steps_per_period,
                   event_tol=args.event_tol, method=args.method, jacobian=args.jacobian, workers=args.workers)
-    with _interrupts() as interrupts:
-        try:
-            branch = _continued(args.out, config, run_settings, "branch", args.param, interrupts,
-                                lambda resume, **kw: continuation(
-                config, args.param, args.start, args.stop, periods=args.period, transient=args.transient,
-                resume=resume, **shared, **kw))
-        except (ShootingError, FlowError) as e:
-            print(f"error: {e}", file=sys.stderr)
-            return 1
-        doubled, doubled_files = [], []
-        if args.switch:
-            for k, pd in enumerate(branch.points("period-doubling"), 1):
-                name = str(Path(args.out).with_name(f"{Path(args.out).stem}_pd{k}.nc")) if args.out else None
 
-                def switched(resume, pd=pd, **kw):
-                    if resume is not None:   # an unfinished period-doubled branch goes on as any branch
-                        return continuation(config, args.param, args.start, args.stop, periods=2 * args.period,
-                                            resume=resume, **shared, **kw)
-                    return period_doubled_branch(config, args.param, pd, args.start, args.stop, periods=args.period,
-                                                 **shared, **kw)
-                try:
-                    doubled.append(_continued(name, config, {**run_settings, "doubling": k},
-                                              f"period-doubled branch {k}", args.param, interrupts, switched))
-                except (ShootingError, FlowError) as e:
-                    print(f"warning: no switch at the period doubling {k} ({args.param} = {pd.param:.6g}): {e}",
-                          file=sys.stderr)
-                    doubled.append(None)
-                    continue
-                if name:
-                    doubled_files.append(name)
+    def branch_of(resume, **kw):
+        return continuation(config, args.param, args.start, args.stop, periods=args.period,
+                            transient=args.transient, resume=resume, **shared, **kw)
+
+    try:
+        branch = _continued(args.out, config, run_settings, "branch", args.param, branch_of)
+    except (ShootingError, FlowError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    doubled, doubled_files = [], []
+    if args.switch:
+        for k, pd in enumerate(branch.points("period-doubling"), 1):
+            name = str(Path(args.out).with_name(f"{Path(args.out).stem}_pd{k}.nc")) if args.out else None
+
+            def switched(resume, pd=pd, **kw):
+                if resume is not None:   # an unfinished period-doubled branch goes on as any branch
+                    return continuation(config, args.param, args.start, args.stop, periods=2 * args.period,
+                                        resume=resume, **shared, **kw)
+                return period_doubled_branch(config, args.param, pd, args.start, args.stop, periods=args.period,
+                                             **shared, **kw)
+            try:
+                doubled.append(_continued(name, config, {**run_settings, "doubling": k},
+                                          f"period-doubled branch {k}", args.param, switched))
+            except (ShootingError, FlowError) as e:
+                print(f"warning: no switch at the period doubling {k} ({args.param} = {pd.param:.6g}): {e}",
+                      file=sys.stderr)
+                doubled.append(None)
+                continue
+            if name:
+                doubled_files.append(name)
     state = args.state or branch.state_names[0]
     if state not in branch.state_names:
         raise ValueError(f"--state {state!r}: not a state of the model ({', '.join(branch.state_names)})")
@@ -195,9 +195,10 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _continued(path, config, run_settings: dict, label: str, param: str, interrupts, follow):
+def _continued(path, config, run_settings: dict, label: str, param: str, follow):
     """The branch ``follow(resume=..., checkpoint=..., checkpoint_every=..., progress=...)`` continues, saved to
-    ``path`` (if given) every :data:`CHECKPOINT_SECONDS` and at the end (``interrupts`` deferred meanwhile).
+    ``path`` (if given) every :data:`CHECKPOINT_SECONDS` and at the end (a signal meanwhile is raised once the
+    file is complete: :func:`~blademodel.interrupts.deferred`).
 
     If ``path`` holds this branch (the same ``run_settings`` and config) unfinished, it is resumed; finished, it is
     read back instead of computed again. On Ctrl-C (or SIGTERM) the points found are saved, and a
@@ -223,6 +224,7 @@ def _continued(path, config, run_settings: dict, label: str, param: str, interru
                         progress=progress)
     except ContinuationInterrupted as e:
         progress.interrupt()
+        interrupts.acknowledge()
         if path is None:
             raise KeyboardInterrupt(f"interrupted: the {len(e.branch.params)} points of the {label} are lost (give "
                                     f"--out FILE.nc to keep them and resume)") from None
@@ -245,45 +247,3 @@ def _own_branch(path, config, run_settings: dict):
     if run != json.loads(json.dumps(run_settings)) or stored_config != config.model_dump(mode="json"):
         return None
     return load_branch(path)
-
-
-class _Interrupts:
-    """Ctrl-C and SIGTERM (``kill``, a batch system's time limit) raised as :class:`KeyboardInterrupt`, except while a
-    file is written (:meth:`deferred`): an exception raised inside netCDF4's compiled code is lost (measured: the
-    run went on to its end), so there it is raised once the file is complete."""
-
-    def __init__(self):
-        self.deferring = self.pending = False
-
-    def __call__(self, signum, frame):
-        if self.deferring:
-            self.pending = True
-            return
-        raise KeyboardInterrupt
-
-    @contextmanager
-    def deferred(self):
-        self.deferring = True
-        try:
-            yield
-        finally:
-            self.deferring = False
-        if self.pending:
-            self.pending = False
-            raise KeyboardInterrupt
-
-
-@contextmanager
-def _interrupts():
-    """An :class:`_Interrupts` handling SIGINT and SIGTERM meanwhile (signals untouched off the main thread)."""
-    handler = _Interrupts()
-    try:
-        before = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
-    except ValueError:   # not the main thread (the command run from a thread): signals stay as they are
-        yield handler
-        return
-    try:
-        yield handler
-    finally:
-        for s, h in before.items():
-            signal.signal(s, h)

@@ -38,6 +38,7 @@ from typing import Callable
 
 import numpy as np
 
+from .. import interrupts
 from ..analysis.spectrum import dft_bin
 from .field_path import AffineFieldPath
 from .period_map import FlowError, PeriodMap, _copy, _key, worker_count
@@ -505,6 +506,7 @@ def _run(ctx, pts, X, T, m, A, bounds, *, progress, checkpoint, checkpoint_every
     last = [time.monotonic()]
 
     def report(point: int, value: float) -> None:
+        interrupts.check()   # a Ctrl-C whose exception compiled code swallowed
         if progress is not None:
             progress(point, value)
         if checkpoint is not None and time.monotonic() - last[0] >= checkpoint_every:
@@ -515,6 +517,7 @@ def _run(ctx, pts, X, T, m, A, bounds, *, progress, checkpoint, checkpoint_every
     try:
         message = _follow(ctx, pts, special, X, T, m, A, bounds, progress=report, earlier=earlier, **follow)
     except KeyboardInterrupt:
+        interrupts.acknowledge()
         where = f"{ctx.fam.name} = {pts[-1]['param']:.6g}"
         raise ContinuationInterrupted(f"interrupted at {where} after {earlier + len(pts)} points",
                                       _assemble(ctx, pts, special, f"interrupted at {where}", before, False)) from None

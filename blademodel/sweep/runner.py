@@ -11,6 +11,7 @@ from typing import Callable
 import numpy as np
 
 from . import storage
+from .. import interrupts
 from .errors import ResultFileError, SweepInterrupted
 from .executors import choose
 from .lock import ResultLock
@@ -171,24 +172,30 @@ def run_study(study: Study, out: str | Path, *, workers: int | None = None, sche
                 # Each point starts where the previous one (same law) ended: a chain, so serial.
                 for i in todo:
                     prev = storage.final_state(out, i - 1) if i > 0 and laws[i - 1] == laws[i] else None
-                    storage.write_point(out, i, run_point(study.base, overrides[i], run, y0=prev))
+                    result = run_point(study.base, overrides[i], run, y0=prev)
+                    with interrupts.deferred():
+                        storage.write_point(out, i, result)
                     done += 1
                     if progress:
                         progress(done, total)
+                    interrupts.check()   # a Ctrl-C whose exception compiled code swallowed
                 return out
             tasks = [(i, study.base, overrides[i], run) for i in todo]
             results = choose(workers, scheduler)(tasks)
             try:
                 for i, result in results:
-                    storage.write_point(out, i, result)
+                    with interrupts.deferred():
+                        storage.write_point(out, i, result)
                     done += 1
                     if progress:
                         progress(done, total)
+                    interrupts.check()   # a Ctrl-C whose exception compiled code swallowed
             finally:   # stops the executor's workers now if this loop ended early
                 close = getattr(results, "close", None)
                 if close is not None:
                     close()
         except KeyboardInterrupt:
+            interrupts.acknowledge()
             interrupt = getattr(progress, "interrupt", None)
             if interrupt is not None:
                 interrupt()   # end a half-drawn progress bar's line
