@@ -49,6 +49,9 @@ def test_an_interrupted_continuation_resumes_onto_the_same_branch(full, tmp_path
     assert np.array_equal(part.params, full.params[:25]) and np.array_equal(part.modes, full.modes[:25])
     assert [len(c.params) for c in checkpoints] == list(range(2, 25))   # after every new point, as asked
     assert all(not c.complete and np.array_equal(c.params, full.params[:len(c.params)]) for c in checkpoints)
+    from blademodel.plots.branch import branch_figure
+    assert "(unfinished: interrupted at omega" in branch_figure(part, "x1").axes[0].get_title()
+    assert "unfinished" not in branch_figure(full, "x1").axes[0].get_title()
 
     resumed = continuation(BladePair(friction="bilinear"), "omega", START, STOP, workers=1, resume=part)
     assert resumed.complete and resumed.message == full.message
@@ -85,14 +88,15 @@ def test_a_ctrl_c_that_compiled_code_swallowed_stops_the_continuation_at_the_nex
     def progress(k, value):
         if k == 6:
             try:
-                os.kill(os.getpid(), signal.SIGINT)
+                os.kill(os.getpid(), signal.SIGTERM)
                 time.sleep(5)
             except KeyboardInterrupt:
-                pass
+                swallowed.append(k)
 
+    swallowed = []
     with interrupts.handled(), pytest.raises(ContinuationInterrupted) as e:
         continuation(BladePair(friction="bilinear"), "omega", START, STOP, workers=1, progress=progress)
-    assert np.array_equal(e.value.branch.params, full.params[:7])
+    assert swallowed == [6] and np.array_equal(e.value.branch.params, full.params[:7])
 
 
 def test_a_ring_resumes_in_the_contact_modes_it_was_saved_in(tmp_path):

@@ -17,6 +17,16 @@ pytestmark = pytest.mark.skipif(threading.current_thread() is not threading.main
                                 reason="signal handlers are set on the main thread only")
 
 
+@pytest.fixture(autouse=True)
+def sigint_as_from_a_terminal():
+    """Python's own SIGINT handler, as in a terminal: a test run started in the background (``nohup``, ``&``, CI)
+    inherits SIGINT ignored, and :func:`~blademodel.interrupts.handled` leaves an ignored signal ignored."""
+    before = signal.getsignal(signal.SIGINT)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
+
 def _swallowed(sig=signal.SIGINT):
     """A signal whose KeyboardInterrupt is caught and dropped, as compiled code that calls back into Python does."""
     try:
@@ -53,6 +63,7 @@ def test_a_signal_while_a_file_is_written_is_raised_when_it_is_complete():
 
 def test_handlers_are_restored_and_an_ignored_sigint_stays_ignored():
     before = signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)
+    assert before[1] is signal.default_int_handler
     with interrupts.handled():
         assert signal.getsignal(signal.SIGTERM) is not before[0]
     assert (signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)) == before

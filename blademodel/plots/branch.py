@@ -81,7 +81,8 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
     ax.set_xlabel(first.field)
     ax.set_ylabel(f"{what} of {state}")
     periods = sorted({b.periods for b in branches})
-    ax.set_title(f"period-{'/'.join(str(p) for p in periods)} orbits continued in {first.field}")
+    unfinished = " (unfinished: " + first.message + ")" if not first.complete else ""
+    ax.set_title(f"period-{'/'.join(str(p) for p in periods)} orbits continued in {first.field}{unfinished}")
     ax.legend(loc="best", fontsize=8)
     ax.grid(alpha=0.3)
     if own:
