@@ -33,6 +33,7 @@ bifurcation. A change in the number of events is a grazing, located by bisection
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field, replace
 from typing import Callable
 
@@ -246,6 +247,10 @@ class _Family:
                 self._dropped = (self._dropped[0] + old.evaluations, self._dropped[1] + old.replays)
             self._cache[key] = PeriodMap(self._integrator_at(key), self.periods, self.jacobian, self.workers)
         return self._cache[key]
+
+    def state_names(self) -> list:
+        """The names of the integrator's states (once a period map exists)."""
+        return list(self._first.meta["state"])
 
     def work(self) -> tuple[int, int]:
         """The integrations and tangent replays of every period map made so far."""
@@ -501,7 +506,6 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
 
 def _run(ctx, pts, X, T, m, A, bounds, *, progress, checkpoint, checkpoint_every, before=None, **follow) -> Branch:
     """:func:`_follow` into a :class:`Branch` (after the points of ``before``), with checkpoints and Ctrl-C."""
-    import time
     special: list = []
     last = [time.monotonic()]
 
@@ -529,7 +533,6 @@ def _assemble(ctx, pts, special, message: str, before: Branch | None, complete: 
     ``pts[0]`` found again)."""
     fam = ctx.fam
     integrations, replays = fam.work()
-    ig = fam.map_at(pts[-1]["param"]).integrator
     b = Branch(field=fam.name, periods=fam.periods, params=np.array([p["param"] for p in pts]),
                states=np.array([p["state"] for p in pts]), multipliers=np.array([p["mu"] for p in pts]),
                stable=np.array([p["stable"] for p in pts], dtype=bool),
@@ -537,7 +540,7 @@ def _assemble(ctx, pts, special, message: str, before: Branch | None, complete: 
                events=np.array([p["events"] for p in pts], dtype=np.int64),
                residuals=np.array([p["residual"] for p in pts]),
                sections=np.array([p["sections"] for p in pts]), special=list(special),
-               state_names=list(ig.meta["state"][:ctx.n]), message=message, integrations=integrations,
+               state_names=fam.state_names()[:ctx.n], message=message, integrations=integrations,
                replays=replays, modes=np.array([_mode_row(p["mode"]) for p in pts]), complete=complete)
     if before is None:
         return b
