@@ -164,6 +164,8 @@ def test_the_continue_command(tmp_path, capsys):
     assert rep["stable"][0] and not rep["stable"][-1] and out.stat().st_size > 0 and png.stat().st_size > 0
     assert main(["continue", yaml, "--param", "no_such_field", "--from", "1", "--to", "2"]) == 2
     assert "no field 'no_such_field'" in capsys.readouterr().err
+    assert main(["continue", yaml, "--param", "gamma", "--from", "7.2", "--to", "7.5", "--tol", "0"]) == 2
+    assert "--tol must be > 0, got 0.0" in capsys.readouterr().err
 
 
 def _den_hartog(omega, m=0.085, k=1e5, F0=60.0, muN=10.0):

@@ -35,6 +35,7 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="periods from rest for the first guess (default 20)")
     p.add_argument("--max-points", type=int, default=400, metavar="K", help="points at most (default 400)")
     p.add_argument("--ds-max", type=float, default=0.05, help="largest arclength step (default 0.05)")
+    p.add_argument("--tol", type=float, default=1e-10, help="scaled residual of each orbit (default 1e-10)")
     add_stepping_arguments(p)
     p.add_argument("--switch", action="store_true",
                    help="also follow the period-doubled branch born at each period doubling found "
@@ -59,7 +60,7 @@ CHECKPOINT_SECONDS = float(os.environ.get("BLADEMODEL_CHECKPOINT_SECONDS", 30.0)
 
 #: The options that shape a branch (``--workers`` does not: the branch is the same to the bit): a file made with
 #: the same ones, and the same config, is this command's own.
-_RUN_OPTIONS = ("param", "start", "stop", "period", "transient", "max_points", "ds_max", "steps_per_period",
+_RUN_OPTIONS = ("param", "start", "stop", "period", "transient", "max_points", "ds_max", "tol", "steps_per_period",
                 "event_tol", "method", "jacobian")
 
 
@@ -102,6 +103,9 @@ def sweep_overlay(path, field: str, state_index: int, law: str | None = None) ->
 def run(args: argparse.Namespace) -> int:
     """Continue the branch; return the exit code."""
     check_at_least_one(args, ("period", "max_points", "steps_per_period"))
+    for name in ("tol", "ds_max"):
+        if not getattr(args, name) > 0:
+            raise ValueError(f"--{name.replace('_', '-')} must be > 0, got {getattr(args, name)}")
     if args.start == args.stop:
         raise ValueError(f"--from and --to must differ, got {args.start:g} twice")
     if args.out:
@@ -116,8 +120,9 @@ def run(args: argparse.Namespace) -> int:
         sweep_overlay(args.overlay, args.param, 0)   # the file's checks, before the continuation
     config, _ = config_and_model(args)
     run_settings = {k: getattr(args, k) for k in _RUN_OPTIONS}
-    shared = dict(max_points=args.max_points, ds_max=args.ds_max, steps_per_period=args.steps_per_period,
-                  event_tol=args.event_tol, method=args.method, jacobian=args.jacobian, workers=args.workers)
+    shared = dict(max_points=args.max_points, ds_max=args.ds_max, tol=args.tol,
+                  steps_per_period=args.steps_per_period, event_tol=args.event_tol, method=args.method,
+                  jacobian=args.jacobian, workers=args.workers)
 
     def branch_of(resume, **kw):
         return continuation(config, args.param, args.start, args.stop, periods=args.period,
