@@ -227,9 +227,7 @@ def _continued(path, config, run_settings: dict, label: str, param: str, follow)
     try:
         branch = follow(resume=stored, checkpoint=save if path else None, checkpoint_every=CHECKPOINT_SECONDS,
                         progress=progress)
-    except ContinuationInterrupted as e:
-        progress.interrupt()
-        interrupts.acknowledge()
+    except ContinuationInterrupted as e:   # continuation() acknowledged the signal; the finally ends the bar
         if path is None:
             raise KeyboardInterrupt(f"interrupted: the {len(e.branch.params)} points of the {label} are lost (give "
                                     f"--out FILE.nc to keep them and resume)") from None

@@ -167,29 +167,30 @@ def run_study(study: Study, out: str | Path, *, workers: int | None = None, sche
         done = total - len(todo)
         if progress:
             progress(done, total)
+
+        def keep(i, result):
+            """Write point ``i`` (a signal meanwhile is raised once it is saved), count it, and act on a signal whose
+            exception compiled code swallowed."""
+            nonlocal done
+            with interrupts.deferred():
+                storage.write_point(out, i, result)
+            done += 1
+            if progress:
+                progress(done, total)
+            interrupts.check()
+
         try:
             if run["warm_start"]:
                 # Each point starts where the previous one (same law) ended: a chain, so serial.
                 for i in todo:
                     prev = storage.final_state(out, i - 1) if i > 0 and laws[i - 1] == laws[i] else None
-                    result = run_point(study.base, overrides[i], run, y0=prev)
-                    with interrupts.deferred():
-                        storage.write_point(out, i, result)
-                    done += 1
-                    if progress:
-                        progress(done, total)
-                    interrupts.check()   # a Ctrl-C whose exception compiled code swallowed
+                    keep(i, run_point(study.base, overrides[i], run, y0=prev))
                 return out
             tasks = [(i, study.base, overrides[i], run) for i in todo]
             results = choose(workers, scheduler)(tasks)
             try:
                 for i, result in results:
-                    with interrupts.deferred():
-                        storage.write_point(out, i, result)
-                    done += 1
-                    if progress:
-                        progress(done, total)
-                    interrupts.check()   # a Ctrl-C whose exception compiled code swallowed
+                    keep(i, result)
             finally:   # stops the executor's workers now if this loop ended early
                 close = getattr(results, "close", None)
                 if close is not None:
