@@ -32,11 +32,11 @@ def add_jacobian_arguments(parser: argparse.ArgumentParser) -> None:
     from ..orbits.period_map import JACOBIAN_METHODS
     parser.add_argument("--jacobian", choices=JACOBIAN_METHODS, default="auto",
                         help="how the period map is differentiated: auto (the tangent of the flow, or central "
-                             "differences on bladed disks), tangent, differences (central), forward (half the "
+                             "differences where it fails), tangent, differences (central), forward (half the "
                              "integrations of central differences, multipliers to about 1e-6)")
     parser.add_argument("--workers", type=int, default=None, metavar="N",
-                        help="threads for Jacobians by differences, as on bladed disks (default: all cores; the "
-                             "result is the same whatever N)")
+                        help="threads for Jacobians by differences (default: all cores; the result is the same "
+                             "whatever N)")
 
 
 def check_at_least_one(args: argparse.Namespace, names) -> None:

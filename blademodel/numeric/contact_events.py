@@ -24,6 +24,11 @@ def apply_transition(t, y, cm, j, gi, I, R, WI, WF, G):
                           vec(WF, I, F_Z, MAX_LAW_STATES))  # noqa: F821
 
 
+def transition_at(t, y, cm, j, gi, I, R, WI, WF, G):
+    """``apply_transition`` for Python (an entry point: the tangent of the period map differentiates resets)."""
+    return apply_transition(t, y, cm, j, gi, I, R, WI, WF, G)
+
+
 def resolve_friction(t, y, cm, I, R, WI, WF, counters, max_pivots):
     """Modes of the contacts in ``U`` from the friction complementarity problem.
 

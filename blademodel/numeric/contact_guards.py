@@ -50,6 +50,11 @@ def eval_guards(t, y, cm, I, R, WI, WF, G):
     evaluate(t, y, cm, I, R, WI, WF, y, G, G, EV_GUARDS | runtime(0))  # noqa: F821
 
 
+def guards_at(t, y, cm, I, R, WI, WF, G):
+    """``eval_guards`` for Python (an entry point: the tangent of the period map differentiates the guards)."""
+    eval_guards(t, y, cm, I, R, WI, WF, G)
+
+
 def guards_of_forces(y, cm, I, R, WI, WF, G):
     """The active contacts' guards from the forces of the last ``contact_forces``."""
     nc = I[H_NC]

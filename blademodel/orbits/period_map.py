@@ -46,6 +46,8 @@ class MapRun:
     n_log : int
     events : int
         Events crossed.
+    modes : ndarray or None
+        The per-contact kernel's contact modes at every step (None for the product-mode kernel).
     """
 
     start: np.ndarray
@@ -59,6 +61,7 @@ class MapRun:
     log: tuple
     n_log: int
     events: int
+    modes: np.ndarray | None = None
 
 
 class PeriodMap:
@@ -79,13 +82,15 @@ class PeriodMap:
     periods : int
         ``n``: the map covers ``n T``.
     jacobian : {"auto", "tangent", "differences", "forward"}
-        How :meth:`jacobian` differentiates. The tangent (:mod:`blademodel.numeric.tangent`:
-        the exact derivative of the kernel's discrete flow, saltation matrices at the
-        events) exists for the product-mode kernel; ``"auto"`` takes it there and falls
-        back to central differences elsewhere, or where the tangent fails (an event
-        with a zero guard rate). ``"forward"`` takes forward differences everywhere: half
-        the integrations of central ones, the multipliers to about ``rel_step``
-        (``docs/orbits.md``).
+        How :meth:`jacobian` differentiates. The tangent is the derivative of the
+        kernel's discrete flow, saltation matrices at the events: for the product-mode
+        kernel the variational equations replayed in compiled code
+        (:mod:`blademodel.numeric.tangent`), for the per-contact kernel the modes'
+        step matrices and the events' saltation replayed from the record
+        (:mod:`blademodel.numeric.contact_tangent`). ``"auto"`` takes it and falls back
+        to central differences where it fails (an event with a zero guard rate).
+        ``"forward"`` takes forward differences everywhere: half the integrations of
+        central ones, the multipliers to about ``rel_step`` (``docs/orbits.md``).
     workers : int, optional
         Threads that integrate the difference quotients of :meth:`differences` (each
         with its own copy of the integrator's work arrays; the kernels release the GIL):
@@ -104,9 +109,9 @@ class PeriodMap:
         if jacobian not in JACOBIAN_METHODS:
             raise ValueError(f"jacobian = {jacobian!r} must be one of {', '.join(JACOBIAN_METHODS)}")
         self.workers = worker_count(workers)
-        product = getattr(integrator, "kernel", "") == "product"
-        if jacobian == "tangent" and not product:
-            raise ValueError("jacobian = 'tangent' needs the product-mode kernel (models with at most one contact)")
+        kernel = getattr(integrator, "kernel", "")
+        if jacobian == "tangent" and kernel not in ("product", "contact"):
+            raise ValueError(f"jacobian = 'tangent' needs one of blademodel's kernels, not {type(integrator).__name__}")
         self.integrator = integrator
         self.periods = int(periods)
         self.n = integrator.n_physical
@@ -114,7 +119,8 @@ class PeriodMap:
         self.replays = 0       # tangent replays of a kept run (no integration)
         self.last_events = -1
         self.method = jacobian
-        self.exact = jacobian in ("auto", "tangent") and product
+        self.exact = jacobian in ("auto", "tangent") and kernel in ("product", "contact")
+        self._contact_tangent = None
         self._last: tuple | None = None   # (key, MapRun) of the last run
         self._log_size = 64
 
@@ -152,7 +158,8 @@ class PeriodMap:
             self._log_size = int(counters[C_LOGGED]) + 16
         self.evaluations += 1
         r = MapRun(start=start, mode=m0, fired=fired, end=full, mode_end=mode_end, t=rec[0], Y=rec[1][:, :self.n],
-                   states=rec[1], log=log, n_log=int(counters[C_LOGGED]), events=int(counters[C_EVENTS]))
+                   states=rec[1], log=log, n_log=int(counters[C_LOGGED]), events=int(counters[C_EVENTS]),
+                   modes=rec[2] if len(rec) > 2 else None)
         self.last_events = r.events
         self._last = (key, r)
         return r
@@ -180,13 +187,25 @@ class PeriodMap:
         SensitivityError
             Where the tangent cannot follow the flow.
         """
-        from ..numeric.tangent import SensitivityError, flow_sensitivity, settle_jacobian
+        from ..numeric.tangent import FlowSensitivity, SensitivityError, flow_sensitivity, settle_jacobian
         ig = self.integrator
         try:
             r = self.run(y, mode)
         except FlowError as e:
             raise SensitivityError(str(e)) from None
         self.replays += 1
+        if ig.kernel == "contact":
+            from ..numeric.contact_tangent import ContactTangent, ContactTangentError
+            if dp is not None:
+                raise SensitivityError("parameter derivatives by the tangent need the product-mode kernel")
+            if self._contact_tangent is None:
+                self._contact_tangent = ContactTangent(ig)
+            try:
+                M = self._contact_tangent.monodromy(r.t, r.states, r.modes, r.log, r.n_log)
+            except ContactTangentError as e:
+                raise SensitivityError(str(e)) from None
+            return FlowSensitivity(state=r.end[:self.n].copy(), mode=_copy(r.mode_end), monodromy=M, parameter=None,
+                                   events=r.n_log)
         s = flow_sensitivity(ig, r.start[:self.n], r.mode, self.periods, dp=dp, dperiod=dperiod,
                              run=(r.end, r.mode_end, r.log, r.n_log), record=r.states)
         if r.fired:

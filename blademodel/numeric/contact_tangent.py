@@ -1,0 +1,408 @@
+"""The monodromy matrix of the per-contact kernel's period map, replayed from its record and event log.
+
+Every mode of a per-contact model is affine in the state: the structure is linear
+(:mod:`.contact_tables`), a contact's normal law is a spring, a damped spring or a
+constant load, and each friction law's force is linear within a mode (Coulomb's
+rigid stick is a linear constraint, solved jointly). Along a recorded run the
+kernel's discrete map is then differentiated exactly, up to the difference
+quotients named below, as the product of
+
+* the Runge-Kutta step's Jacobian of each whole step, the method's stability
+  polynomial ``R(h A)`` of the mode's constant ``A = df/dy`` (taken once per mode by
+  differences of ``rhs``, exact for an affine flow up to rounding);
+* at each event, the discrete saltation matrix: the sub-step to the event, whose
+  end time moves with the start state as the guard ``g(t_e, y_e) = 0`` requires
+  (``dt_e = -g_y W / (g_t + g_y Phi_h)``, ``Phi_h`` the sub-step's derivative in its
+  length), the transition's reset (a law state set to zero), the kernel's velocity
+  projection onto the stick constraints where a rigid contact starts to stick, and
+  the sub-step from the event to the end of the step, whose start time moved.
+
+The kernel steps each *cluster* of an event through its sub-steps while the rest of
+the model keeps the whole step (:mod:`.contact_loop`); the replay does the same:
+the rows coupled to a step's event contacts (the connected component of the modes'
+``A`` and the contacts' coordinates) take the sub-steps, the others ``R(h A)``.
+Guard gradients and reset Jacobians are central differences of the compiled guards
+and transitions (affine within a mode, so their error is rounding), as are the
+sub-steps' derivatives in their start time and length (their error, about
+``1e-12`` of the step, is far below what a difference quotient of the whole map
+resolves).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections import OrderedDict
+
+import numpy as np
+from scipy.sparse.csgraph import connected_components
+
+from . import contract as C
+
+
+#: The modes' matrices, guard gradients and reset Jacobians of the last few model structures. They depend
+#: on parameter values too, so every one is checked, before its first use by a :class:`ContactTangent`,
+#: against the compiled functions along a probe direction: a continuation in the excitation frequency (or
+#: the force, or the gap), which changes ``b(t)`` only, reuses them from point to point.
+_CACHES: OrderedDict = OrderedDict()
+_KEEP = 4
+
+
+def _caches(integrator) -> dict:
+    h = hashlib.sha1(integrator.module.__name__.encode())
+    h.update(np.ascontiguousarray(integrator.I).tobytes())
+    key = h.hexdigest()
+    c = _CACHES.pop(key, None) or {"A": {}, "gy": {}, "reset": {}}
+    _CACHES[key] = c
+    while len(_CACHES) > _KEEP:
+        _CACHES.popitem(last=False)
+    return c
+
+
+def _agrees(change: float, predicted: float, size: float) -> bool:
+    """Whether a function's change along a probe is the one its kept derivative predicts (affine: to rounding)."""
+    return abs(change - predicted) <= 1e-7 * size
+
+
+class ContactTangentError(RuntimeError):
+    """The replay cannot differentiate this run (a grazing event, or a mode that is not affine)."""
+
+
+def stability_matrix(hA: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
+    """``d y1 / d y0`` of one explicit Runge-Kutta step of the affine flow ``y' = A y + b(t)``: ``R(hA)``.
+
+    ``coefficients``: the method's stability polynomial, lowest power first
+    (:meth:`~blademodel.numeric.methods.Method.amplification_coefficients`).
+    """
+    out = coefficients[-1] * np.eye(hA.shape[0])
+    for c in coefficients[-2::-1]:   # Horner
+        out = hA @ out
+        out[np.diag_indices_from(out)] += c
+    return out
+
+
+class ContactTangent:
+    """The replayed tangent of a :class:`~blademodel.numeric.contact_kernel.ContactIntegrator`'s runs.
+
+    Parameters
+    ----------
+    integrator : ContactIntegrator
+        The integrator whose runs are differentiated; its parameters must not change
+        while this object is used (the modes' matrices are kept).
+    """
+
+    def __init__(self, integrator):
+        if getattr(integrator, "kernel", "") != "contact":
+            raise ValueError("ContactTangent differentiates the per-contact kernel's runs only")
+        self.ig = integrator
+        self.mod = integrator.module
+        self.n = integrator.n_physical
+        I, R = integrator.I, integrator.R
+        self.nq = int(I[C.H_N])
+        self.nc = int(I[C.H_NC])
+        self.cidx = np.asarray(I[I[C.O_CIDX]:I[C.O_CIDX] + 4 * self.nc])
+        self.cgr = np.asarray(R[I[C.R_GR]:I[C.R_GR] + 4 * self.nc])
+        self.invm = np.asarray(R[I[C.R_INVM]:I[C.R_INVM] + self.nq])
+        self.claw = np.asarray(I[I[C.O_CLAW]:I[C.O_CLAW] + self.nc])
+        method = integrator.method
+        self._b, self._a, self._c = method.b, method.A, method.c
+        self._poly = method.amplification_coefficients()
+        caches = _caches(integrator)
+        self._A, self._gy, self._reset = caches["A"], caches["gy"], caches["reset"]
+        self._checked: set = set()   # keys of kept matrices checked against this integrator
+        self._probe = np.random.default_rng(0).uniform(-1.0, 1.0, self.n)
+        self._factored = None   # the contact modes the stick problem in the work arrays is factored for
+        self._R: dict = {}
+        self._G = np.zeros_like(integrator.GS[0])
+        self._rows = [self._contact_rows(j) for j in range(self.nc)]
+
+    # --- the pieces -------------------------------------------------------------------------------
+    def _contact_rows(self, j: int) -> list:
+        q = [int(i) for i in self.cidx[4 * j:4 * j + 4] if i >= 0]
+        return q + [self.nq + i for i in q]
+
+    def _rhs(self, t, y, cm):
+        """``dy/dt`` in ``cm`` (the stick problem factored once for consecutive calls in one mode)."""
+        ig = self.ig
+        key = cm.tobytes()
+        if self._factored != key:
+            self.mod.factor_stick(cm, ig.I, ig.R, ig.WI, ig.WF)
+            self._factored = key
+        out = np.empty(ig.n_state)
+        self.mod.rhs(float(t), y, cm, ig.I, ig.R, ig.WI, ig.WF, out)
+        return out
+
+    def flow_matrix(self, cm) -> np.ndarray:
+        """``A = df/dy`` of the physical states in the contact modes ``cm`` (kept per mode)."""
+        key = cm.tobytes()
+        A = self._A.get(key)
+        if A is not None and key not in self._checked:
+            y = np.zeros(self.ig.n_state)
+            f0 = self._rhs(0.0, y, cm)[:self.n]
+            y[:self.n] = self._probe
+            change = self._rhs(0.0, y, cm)[:self.n] - f0
+            if np.max(np.abs(change - A @ self._probe)) > 1e-9 * np.max(np.abs(A) @ np.abs(self._probe)):
+                A = None
+            self._checked.add(key)
+        if A is None:
+            self._checked.add(key)
+            n, N = self.n, self.ig.n_state
+            scale = 1.0
+            y = np.zeros(N)
+            f0 = self._rhs(0.0, y, cm)[:n]
+            A = np.empty((n, n))
+            for i in range(n):
+                y[i] = scale
+                A[:, i] = (self._rhs(0.0, y, cm)[:n] - f0) / scale
+                y[i] = 0.0
+            self._A[key] = A
+        return A
+
+    def _step_matrix(self, h: float, cm, rows=None) -> np.ndarray:
+        if rows is None:
+            key = (h, cm.tobytes())
+            M = self._R.get(key)
+            if M is None:
+                M = self._R[key] = stability_matrix(h * self.flow_matrix(cm), self._poly)
+            return M
+        return stability_matrix(h * self.flow_matrix(cm)[np.ix_(rows, rows)], self._poly)
+
+    def _substep_derivatives(self, t, y, h, cm, H):
+        """The method's sub-step of length ``h`` from ``(t, y)`` in ``cm``: its end (the full state) and the
+        derivatives of the physical end in its start time and its length.
+
+        The flow is affine, ``f = A y + b(t)``: the stages' derivatives follow from
+        ``A`` and ``b'`` at the stages' times (a central difference of ``f(t, 0)``)::
+
+            dK_i/dh  = A dY_i/dh + c_i b'(T_i),   dY_i/dh  = sum_j a_ij (K_j + h dK_j/dh)
+            dK_i/dt0 = A dY_i/dt0 + b'(T_i),      dY_i/dt0 = h sum_j a_ij dK_j/dt0
+        """
+        a, b, c = self._a, self._b, self._c
+        n = self.n
+        A = self.flow_matrix(cm)
+        d = 1e-6 * H
+        s = b.size
+        zero = np.zeros_like(y)
+        rates: dict = {}
+        K, Kh, Kt = [], [], []
+        for i in range(s):
+            Y = y.copy()
+            Yh = np.zeros(n)
+            Yt = np.zeros(n)
+            for j in range(i):
+                if a[i, j] != 0.0:
+                    Y += h * a[i, j] * K[j]
+                    Yh += a[i, j] * (K[j][:n] + h * Kh[j])
+                    Yt += h * a[i, j] * Kt[j]
+            T = t + c[i] * h
+            K.append(self._rhs(T, Y, cm))
+            bt = rates.get(c[i])
+            if bt is None:
+                bt = rates[c[i]] = (self._rhs(T + d, zero, cm)[:n] - self._rhs(T - d, zero, cm)[:n]) / (2 * d)
+            Kh.append(A @ Yh + c[i] * bt)
+            Kt.append(A @ Yt + bt)
+        end = y.copy()
+        Ph = np.zeros(n)
+        Pt = np.zeros(n)
+        for i in range(s):
+            end += h * b[i] * K[i]
+            Ph += b[i] * (K[i][:n] + h * Kh[i])
+            Pt += h * b[i] * Kt[i]
+        return end, Pt, Ph
+
+    def _guard(self, t, y, cm, j, gi) -> float:
+        ig = self.ig
+        key = cm.tobytes()
+        if self._factored != key:
+            self.mod.factor_stick(cm, ig.I, ig.R, ig.WI, ig.WF)
+            self._factored = key
+        self.mod.guards_at(float(t), y, cm, ig.I, ig.R, ig.WI, ig.WF, self._G)
+        return float(self._G[j, gi])
+
+    def _guard_gradient(self, t, y, cm, j, gi, rows, H):
+        """``g_y`` on ``rows`` and ``g_t`` of contact ``j``'s guard ``gi`` in ``cm``.
+
+        A guard is affine in the state within a mode, so its gradient is kept per mode
+        and guard; each reuse is checked by the guard's change along one direction
+        (where the joint stick forces of a closed ring make it piecewise affine, the
+        gradient is taken afresh).
+        """
+        d = 1e-6 * H
+        gt = (self._guard(t + d, y, cm, j, gi) - self._guard(t - d, y, cm, j, gi)) / (2 * d)
+        key = (cm.tobytes(), int(j), int(gi))
+        gy = self._gy.get(key)
+        if gy is not None:
+            probe = np.zeros_like(y)
+            probe[rows] = 1e-6 * np.maximum(np.abs(y[rows]), 1e-3 * np.max(np.abs(y[rows])))
+            change = self._guard(t, y + probe, cm, j, gi) - self._guard(t, y - probe, cm, j, gi)
+            if abs(change - 2.0 * float(gy[rows] @ probe[rows])) <= 1e-7 * (abs(change) + float(np.abs(gy[rows]) @ np.abs(probe[rows]))):
+                return gy, gt
+        gy = np.zeros(self.n)
+        for i in rows:
+            e = 1e-6 * max(abs(y[i]), 1e-3 * np.max(np.abs(y[rows])), 1e-300)
+            yp = y.copy()
+            yp[i] += e
+            ym = y.copy()
+            ym[i] -= e
+            gy[i] = (self._guard(t, yp, cm, j, gi) - self._guard(t, ym, cm, j, gi)) / (2 * e)
+        self._gy[key] = gy
+        return gy, gt
+
+    def _rigid_stick(self, j: int, m: int) -> bool:
+        K = int(self.claw[j])
+        return bool(self.mod.IS_STICK[K, m]) and int(self.mod.RIGID[K, 0]) == m
+
+    def _reset_jacobian(self, t, y, cm, j, gi):
+        """``d y+ / d y`` of contact ``j``'s transition by guard ``gi`` and the state after it; None: no law state."""
+        ig = self.ig
+        if int(self.mod.NSTATES[int(self.claw[j])]) == 0:
+            return None, y
+
+        def fire(yy):
+            yy = yy.copy()
+            self._factored = None
+            self.mod.transition_at(float(t), yy, cm.copy(), int(j), int(gi), ig.I, ig.R, ig.WI, ig.WF, self._G)
+            return yy
+
+        key = (cm.tobytes(), int(j), int(gi))
+        Rj = self._reset.get(key)
+        if Rj is not None and key not in self._checked:
+            size = max(float(np.max(np.abs(y[:self.n]))), 1e-300)
+            probe = np.zeros_like(y)
+            probe[:self.n] = 1e-6 * size * self._probe
+            change = fire(y + probe)[:self.n] - fire(y - probe)[:self.n]
+            if np.max(np.abs(change - 2.0 * Rj @ probe[:self.n])) > 1e-7 * np.max(np.abs(Rj) @ np.abs(probe[:self.n])):
+                Rj = None
+        self._checked.add(key)
+        if Rj is None:
+            n = self.n
+            Rj = np.empty((n, n))
+            size = max(float(np.max(np.abs(y[:n]))), 1e-300)
+            for i in range(n):
+                e = 1e-6 * max(abs(y[i]), 1e-3 * size)
+                yp = y.copy()
+                yp[i] += e
+                ym = y.copy()
+                ym[i] -= e
+                Rj[:, i] = (fire(yp)[:n] - fire(ym)[:n]) / (2 * e)
+            self._reset[key] = Rj
+        return Rj, fire(y)
+
+    def _projection(self, contacts) -> np.ndarray:
+        """The kernel's projection of the velocities onto zero slip of ``contacts``: ``u -= M^-1 G^T W^+ G u``."""
+        nq = self.nq
+        G = np.zeros((len(contacts), nq))
+        for a, j in enumerate(contacts):
+            for q in range(4):
+                i = self.cidx[4 * j + q]
+                if i >= 0:
+                    G[a, i] += self.cgr[4 * j + q]
+        MG = self.invm[:, None] * G.T
+        # a closed ring that sticks makes W singular; G^T x is the same for every solution
+        Pv = np.eye(nq) - MG @ np.linalg.pinv(G @ MG) @ G
+        P = np.eye(self.n)
+        P[nq:2 * nq, nq:2 * nq] = Pv
+        return P
+
+    def _components(self, mats, seeds) -> np.ndarray:
+        G = np.zeros((self.n, self.n), dtype=bool)
+        for A in mats:
+            G |= A != 0
+        for j in seeds:
+            r = self._rows[j]
+            G[np.ix_(r, r)] = True
+        return connected_components(G | G.T, directed=False)[1]
+
+    # --- the replay -------------------------------------------------------------------------------
+    def monodromy(self, rec_t, rec_y, rec_cm, log, n_log: int) -> np.ndarray:
+        """``d y(t_end) / d y(t_0)`` of the recorded run (physical states by physical states).
+
+        Parameters
+        ----------
+        rec_t, rec_y, rec_cm : ndarray
+            The run recorded at every step (``record_buffer``), its start in row 0.
+        log : tuple
+            Its event log (``log_buffer``) and ``n_log`` the entries used.
+
+        Raises
+        ------
+        ContactTangentError
+            At an event whose guard has no rate along the flow (grazing), or where the
+            log and the record disagree.
+        """
+        n = self.n
+        lt, lc, lg, lf, lto = log
+        V = np.eye(n)
+        ie = 0
+        H = float(rec_t[1] - rec_t[0])
+        self.ig._clear_near_marks()   # guards without the kernel's offsets for early-fired contacts
+        self._factored = None         # the kernel has used the work arrays since
+        for k in range(rec_t.shape[0] - 1):
+            t0, t1 = float(rec_t[k]), float(rec_t[k + 1])
+            cm0 = rec_cm[k].astype(np.int64)
+            if not (ie < n_log and lt[ie] <= t1):
+                V = self._step_matrix(H, cm0) @ V
+                continue
+            i0 = ie
+            while ie < n_log and lt[ie] <= t1:
+                ie += 1
+            order = sorted(range(i0, ie), key=lambda i: lt[i])
+            cmx = cm0.copy()
+            mats = [self.flow_matrix(cm0)]
+            for i in order:
+                if cmx[lc[i]] != lf[i]:
+                    raise ContactTangentError(f"the event log disagrees with the record at t = {lt[i]:.9g}")
+                cmx[lc[i]] = lto[i]
+                mats.append(self.flow_matrix(cmx))
+            if not np.array_equal(cmx, rec_cm[k + 1]):
+                raise ContactTangentError(f"the event log disagrees with the record at t = {t1:.9g}")
+            seeds = sorted({int(lc[i]) for i in order})
+            comp = self._components(mats, seeds)
+            Vn = self._step_matrix(H, cm0) @ V
+            for c in sorted({int(comp[self._rows[j][0]]) for j in seeds}):
+                rows = np.flatnonzero(comp == c)
+                events = [i for i in order if comp[self._rows[int(lc[i])][0]] == c]
+                Vn[rows] = self._cluster_step(V[rows], rows, events, log, t0, t1, rec_y[k], cm0, H)
+            V = Vn
+        return V
+
+    def _cluster_step(self, Vc, rows, events, log, t0, t1, y0, cm0, H):
+        """The rows ``rows`` of a step's tangent through the cluster's ``events`` (log indices, in time order)."""
+        lt, lc, lg, lf, lto = log
+        n = self.n
+        cm = cm0.copy()
+        ta, ya = t0, y0.copy()
+        dta = np.zeros(n)
+        q = 0
+        while q < len(events):
+            te = float(lt[events[q]])
+            group = []
+            while q < len(events) and lt[events[q]] == te:
+                i = events[q]
+                group.append((int(lc[i]), int(lg[i]), int(lto[i])))
+                q += 1
+            ye, Pt, Ph = self._substep_derivatives(ta, ya, te - ta, cm, H)
+            W = self._step_matrix(te - ta, cm, rows) @ Vc + np.outer((Pt - Ph)[rows], dta)
+            fired = next(((j, gi) for j, gi, _ in group if gi >= 0), None)
+            if fired is None:
+                dtb = np.zeros(n)
+            else:
+                gy, gt = self._guard_gradient(te, ye, cm, *fired, rows, H)
+                rate = gt + float(gy[rows] @ Ph[rows])
+                if rate == 0.0 or not np.isfinite(rate):
+                    raise ContactTangentError(f"a grazing event at t = {te:.9g} (its guard has no rate)")
+                dtb = -(gy[rows] @ W) / rate
+            Vc = W + np.outer(Ph[rows], dtb)
+            cm2 = cm.copy()
+            for j, gi, to in group:
+                if gi >= 0:
+                    Rj, ye = self._reset_jacobian(te, ye, cm2, j, gi)
+                    if Rj is not None:
+                        Vc = Rj[np.ix_(rows, rows)] @ Vc
+                cm2[j] = to
+            in_cluster = [j for j in range(self.nc) if self._rows[j][0] in set(rows.tolist())]
+            if any(self._rigid_stick(j, cm2[j]) and not self._rigid_stick(j, cm[j]) for j in in_cluster):
+                stick = [j for j in in_cluster if self._rigid_stick(j, cm2[j])]
+                Vc = self._projection(stick)[np.ix_(rows, rows)] @ Vc
+            ta, ya, cm, dta = te, ye, cm2, dtb
+        _, Pt, Ph = self._substep_derivatives(ta, ya, t1 - ta, cm, H)
+        return self._step_matrix(t1 - ta, cm, rows) @ Vc + np.outer((Pt - Ph)[rows], dta)
