@@ -152,9 +152,12 @@ def test_the_tangent_along_a_config_field():
     assert np.max(np.abs(s.parameter - fd)) < 1e-6 * np.max(np.abs(s.parameter))
 
 
-def test_the_period_map_takes_the_tangent_and_falls_back_to_differences():
-    """``PeriodMap.jacobian`` is the tangent on the product kernel (equal to ``differences`` to 1e-6); on the
-    per-contact kernel ``auto`` falls back to differences and ``tangent`` is refused, naming the kernel."""
+def test_the_period_map_takes_the_tangent_on_either_kernel():
+    """``PeriodMap.jacobian`` is the tangent on the product kernel (equal to ``differences`` to 1e-6). The
+    pair on the per-contact kernel is differentiated by that kernel's replayed tangent
+    (:mod:`blademodel.numeric.contact_tangent`: no generated variational equations at all), which equals the
+    product kernel's compiled one to 1e-6; the product kernel's ``flow_sensitivity`` refuses the other
+    kernel's integrator, naming its own."""
     _, ig, y, mode = _settled("coulomb")
     P = PeriodMap(ig, 1)
     assert P.exact
@@ -162,10 +165,12 @@ def test_the_period_map_takes_the_tangent_and_falls_back_to_differences():
     J = P.jacobian(y, mode, sc)
     D = P.differences(y, mode, sc, 1e-5)
     assert np.max(np.abs(J - D)) < 1e-6 * np.max(np.abs(J))
-    ig_c = make_integrator(BladePair().build(), kernel="contact")
-    assert not PeriodMap(ig_c, 1).exact
-    with pytest.raises(ValueError, match="product-mode kernel"):
-        PeriodMap(ig_c, 1, jacobian="tangent")
+    ig_c = make_integrator(BladePair().build(), kernel="contact", steps_per_period=ig.steps_per_period)
+    P_c = PeriodMap(ig_c, 1)
+    assert P_c.exact
+    J_c = P_c.jacobian(y, ig_c.mode_of(np.append(y, np.zeros(ig_c.n_state - y.size))), sc)
+    assert P_c.replays == 1 and P.last_events > 0
+    assert np.max(np.abs((J_c - J) * sc[None, :] / sc[:, None])) < 1e-6 * np.max(np.abs(J * sc[None, :] / sc[:, None]))
     with pytest.raises(ValueError, match="jacobian = 'newton'"):
         PeriodMap(ig, 1, jacobian="newton")
     with pytest.raises(SensitivityError, match="product-mode kernel"):

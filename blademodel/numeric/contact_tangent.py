@@ -34,7 +34,6 @@ import hashlib
 from collections import OrderedDict
 
 import numpy as np
-from scipy.sparse.csgraph import connected_components
 
 from . import contract as C
 
@@ -73,10 +72,11 @@ def stability_matrix(hA: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
     ``coefficients``: the method's stability polynomial, lowest power first
     (:meth:`~blademodel.numeric.methods.Method.amplification_coefficients`).
     """
-    out = coefficients[-1] * np.eye(hA.shape[0])
+    m = hA.shape[0]
+    out = coefficients[-1] * np.eye(m)
     for c in coefficients[-2::-1]:   # Horner
         out = hA @ out
-        out[np.diag_indices_from(out)] += c
+        out.flat[::m + 1] += c
     return out
 
 
@@ -131,40 +131,60 @@ class ContactTangent:
         self.mod.rhs(float(t), y, cm, ig.I, ig.R, ig.WI, ig.WF, out)
         return out
 
-    def flow_matrix(self, cm) -> np.ndarray:
-        """``A = df/dy`` of the physical states in the contact modes ``cm`` (kept per mode)."""
+    def flow_matrix(self, cm, y=None) -> np.ndarray:
+        """``A = df/dy`` of the physical states in the contact modes ``cm`` (kept per mode).
+
+        Built from ``n + 1`` calls of ``rhs`` at the zero state. Before a kept or new
+        matrix is first used by this object, the flow's change along a probe direction
+        at ``y`` (a state where the mode holds) is checked against ``A``: a kept matrix
+        of other parameter values is built again, and a mode that is not affine (a
+        friction law whose force is not linear within a mode) raises
+        :class:`ContactTangentError`.
+        """
         key = cm.tobytes()
         A = self._A.get(key)
-        if A is not None and key not in self._checked:
-            y = np.zeros(self.ig.n_state)
-            f0 = self._rhs(0.0, y, cm)[:self.n]
-            y[:self.n] = self._probe
-            change = self._rhs(0.0, y, cm)[:self.n] - f0
-            if np.max(np.abs(change - A @ self._probe)) > 1e-9 * np.max(np.abs(A) @ np.abs(self._probe)):
-                A = None
+        fresh = A is None
+        if fresh:
+            A = self._A[key] = self._build_flow_matrix(cm)
+        if key not in self._checked:
+            if not self._flow_agrees(A, cm, y):
+                if fresh:
+                    raise ContactTangentError(f"the flow in contact modes {cm.tolist()} is not affine in the state")
+                A = self._A[key] = self._build_flow_matrix(cm)
+                if not self._flow_agrees(A, cm, y):
+                    raise ContactTangentError(f"the flow in contact modes {cm.tolist()} is not affine in the state")
             self._checked.add(key)
-        if A is None:
-            self._checked.add(key)
-            n, N = self.n, self.ig.n_state
-            scale = 1.0
-            y = np.zeros(N)
-            f0 = self._rhs(0.0, y, cm)[:n]
-            A = np.empty((n, n))
-            for i in range(n):
-                y[i] = scale
-                A[:, i] = (self._rhs(0.0, y, cm)[:n] - f0) / scale
-                y[i] = 0.0
-            self._A[key] = A
         return A
 
-    def _step_matrix(self, h: float, cm, rows=None) -> np.ndarray:
+    def _build_flow_matrix(self, cm) -> np.ndarray:
+        n = self.n
+        y = np.zeros(self.ig.n_state)
+        f0 = self._rhs(0.0, y, cm)[:n]
+        A = np.empty((n, n))
+        for i in range(n):
+            y[i] = 1.0
+            A[:, i] = self._rhs(0.0, y, cm)[:n] - f0
+            y[i] = 0.0
+        return A
+
+    def _flow_agrees(self, A, cm, y) -> bool:
+        """Whether ``f(y + p) - f(y - p) = 2 A p`` for the probe ``p`` (scaled to ``y``), to rounding."""
+        n = self.n
+        base = np.zeros(self.ig.n_state) if y is None else np.asarray(y, dtype=float).copy()
+        size = max(float(np.max(np.abs(base[:n]))), 1.0 if y is None else 1e-300)
+        p = np.zeros_like(base)
+        p[:n] = 1e-3 * size * self._probe
+        change = self._rhs(0.0, base + p, cm)[:n] - self._rhs(0.0, base - p, cm)[:n]
+        return bool(np.max(np.abs(change - 2.0 * A @ p[:n])) <= 1e-8 * np.max(np.abs(A) @ np.abs(p[:n])))
+
+    def _step_matrix(self, h: float, cm, rows=None, y=None) -> np.ndarray:
         if rows is None:
             key = (h, cm.tobytes())
             M = self._R.get(key)
             if M is None:
-                M = self._R[key] = stability_matrix(h * self.flow_matrix(cm), self._poly)
+                M = self._R[key] = stability_matrix(h * self.flow_matrix(cm, y), self._poly)
             return M
-        return stability_matrix(h * self.flow_matrix(cm)[np.ix_(rows, rows)], self._poly)
+        return stability_matrix(h * self.flow_matrix(cm, y)[np.ix_(rows, rows)], self._poly)
 
     def _substep_derivatives(self, t, y, h, cm, H):
         """The method's sub-step of length ``h`` from ``(t, y)`` in ``cm``: its end (the full state) and the
@@ -178,7 +198,7 @@ class ContactTangent:
         """
         a, b, c = self._a, self._b, self._c
         n = self.n
-        A = self.flow_matrix(cm)
+        A = self.flow_matrix(cm, y)
         d = 1e-6 * H
         s = b.size
         zero = np.zeros_like(y)
@@ -303,14 +323,30 @@ class ContactTangent:
         P[nq:2 * nq, nq:2 * nq] = Pv
         return P
 
-    def _components(self, mats, seeds) -> np.ndarray:
-        G = np.zeros((self.n, self.n), dtype=bool)
+    def _clusters(self, mats, seeds) -> list:
+        """The rows of each cluster of the event contacts ``seeds``: what the modes' ``A`` (any of ``mats``) and the
+        contacts' own coordinates couple to them, transitively."""
+        coupled = np.zeros((self.n, self.n), dtype=bool)
         for A in mats:
-            G |= A != 0
+            coupled |= A != 0
+        coupled |= coupled.T
         for j in seeds:
             r = self._rows[j]
-            G[np.ix_(r, r)] = True
-        return connected_components(G | G.T, directed=False)[1]
+            coupled[np.ix_(r, r)] = True
+        clusters, seen = [], np.zeros(self.n, dtype=bool)
+        for j in seeds:
+            if seen[self._rows[j][0]]:
+                continue
+            reach = np.zeros(self.n, dtype=bool)
+            reach[self._rows[j]] = True
+            while True:
+                grown = coupled[reach].any(axis=0) | reach
+                if np.array_equal(grown, reach):
+                    break
+                reach = grown
+            seen |= reach
+            clusters.append(np.flatnonzero(reach))
+        return clusters
 
     # --- the replay -------------------------------------------------------------------------------
     def monodromy(self, rec_t, rec_y, rec_cm, log, n_log: int) -> np.ndarray:
@@ -340,27 +376,26 @@ class ContactTangent:
             t0, t1 = float(rec_t[k]), float(rec_t[k + 1])
             cm0 = rec_cm[k].astype(np.int64)
             if not (ie < n_log and lt[ie] <= t1):
-                V = self._step_matrix(H, cm0) @ V
+                V = self._step_matrix(H, cm0, y=rec_y[k]) @ V
                 continue
             i0 = ie
             while ie < n_log and lt[ie] <= t1:
                 ie += 1
             order = sorted(range(i0, ie), key=lambda i: lt[i])
             cmx = cm0.copy()
-            mats = [self.flow_matrix(cm0)]
+            mats = [self.flow_matrix(cm0, rec_y[k])]
             for i in order:
                 if cmx[lc[i]] != lf[i]:
                     raise ContactTangentError(f"the event log disagrees with the record at t = {lt[i]:.9g}")
                 cmx[lc[i]] = lto[i]
-                mats.append(self.flow_matrix(cmx))
+                mats.append(self.flow_matrix(cmx, rec_y[k]))
             if not np.array_equal(cmx, rec_cm[k + 1]):
                 raise ContactTangentError(f"the event log disagrees with the record at t = {t1:.9g}")
             seeds = sorted({int(lc[i]) for i in order})
-            comp = self._components(mats, seeds)
             Vn = self._step_matrix(H, cm0) @ V
-            for c in sorted({int(comp[self._rows[j][0]]) for j in seeds}):
-                rows = np.flatnonzero(comp == c)
-                events = [i for i in order if comp[self._rows[int(lc[i])][0]] == c]
+            for rows in self._clusters(mats, seeds):
+                inside = set(rows.tolist())
+                events = [i for i in order if self._rows[int(lc[i])][0] in inside]
                 Vn[rows] = self._cluster_step(V[rows], rows, events, log, t0, t1, rec_y[k], cm0, H)
             V = Vn
         return V
@@ -369,6 +404,8 @@ class ContactTangent:
         """The rows ``rows`` of a step's tangent through the cluster's ``events`` (log indices, in time order)."""
         lt, lc, lg, lf, lto = log
         n = self.n
+        inside = set(rows.tolist())
+        in_cluster = [j for j in range(self.nc) if self._rows[j][0] in inside]
         cm = cm0.copy()
         ta, ya = t0, y0.copy()
         dta = np.zeros(n)
@@ -399,7 +436,6 @@ class ContactTangent:
                     if Rj is not None:
                         Vc = Rj[np.ix_(rows, rows)] @ Vc
                 cm2[j] = to
-            in_cluster = [j for j in range(self.nc) if self._rows[j][0] in set(rows.tolist())]
             if any(self._rigid_stick(j, cm2[j]) and not self._rigid_stick(j, cm[j]) for j in in_cluster):
                 stick = [j for j in in_cluster if self._rigid_stick(j, cm2[j])]
                 Vc = self._projection(stick)[np.ix_(rows, rows)] @ Vc
