@@ -220,15 +220,6 @@ class PeriodMap:
         r = self.run(y, mode)
         return r.end[:self.n].copy(), _copy(r.mode_end)
 
-    def linearize(self, y, mode, scale, rel_step: float = 1e-6):
-        """``P(y)``, the mode it ends in and ``dP/dy``: one tangent run, or the map and its differences."""
-        if self.exact:
-            s = self.try_derivatives(y, mode)
-            if s is not None:
-                return s.state, s.mode, s.monodromy
-        Py, mode_end = self(y, _copy(mode))
-        return Py, mode_end, self.differences(y, mode, scale, rel_step)
-
     def try_derivatives(self, y, mode, dp=None, dperiod: float = 0.0):
         """:meth:`derivatives`, or None where the tangent fails and differences may stand in.
 

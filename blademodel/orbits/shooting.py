@@ -210,12 +210,8 @@ def _shoot(P, y, mode, scale, tol, max_iter, rel_step, history):
 def _newton(P, y, mode, scale, tol, max_iter, rel_step, history):
     """Newton's method on ``P(y) - y`` from ``(y, mode)``; the solution and the mode ``P`` ends in."""
     n = y.size
-    J = None
     for it in range(max_iter + 1):
-        if P.exact and it > 0:
-            Py, mode_end, J = P.linearize(y, mode, scale, rel_step)
-        else:
-            Py, mode_end = P(y, _copy(mode))
+        Py, mode_end = P(y, _copy(mode))   # kept: the tangent below replays this run
         r = (Py - y) / scale
         res = float(np.max(np.abs(r)))
         history.append(res)
@@ -224,8 +220,7 @@ def _newton(P, y, mode, scale, tol, max_iter, rel_step, history):
         if it == max_iter:
             raise ShootingError(f"shooting did not converge in {max_iter} Newton steps: scaled residual "
                                 f"{res:.3g} > tol = {tol:g} (history: {_show(history)})", history, y)
-        if J is None or not P.exact:
-            J = P.jacobian(y, mode, scale, rel_step)
+        J = P.jacobian(y, mode, scale, rel_step)   # only where not converged: a ring's replay is not cheap
         Js = (J - np.eye(n)) * scale[None, :] / scale[:, None]
         step = np.linalg.lstsq(Js, -r, rcond=None)[0] * scale
         lam = 1.0
