@@ -1127,8 +1127,9 @@ class _Context:
         looser than the branch's ``tol`` needs less): where the bracket is wide, one or
         two corrections, by Broyden's method alone, from the Jacobian of the end nearer
         the trial (``a``'s up to the bracket's middle, ``b``'s past it); a trial that
-        fails is tried beside. The located point is solved to ``tol`` and alone gets
-        its Jacobian.
+        fails is tried beside. The located point is solved to ``tol``; it gets no
+        Jacobian (the map has a kink there). Returns the located point's field value,
+        state and mode, or ``b`` where the bisection did not close.
         """
         X_lo, X_hi = Xa, b["X"]
         best = None
@@ -1155,11 +1156,11 @@ class _Context:
             r, _ = self.residual(Xb, mb)
             if float(np.max(np.abs(r))) > self.tol:
                 d = X_hi - X_lo
-                Xb, mb, A = self.correct(Xb, d / np.linalg.norm(d), mb, a["A"])
-            else:
-                A = self._jacobian_at(Xb, mb)
-            if Xb is not None and A is not None:
-                return self.point(Xb, mb, A)
+                Xb, mb, _ = self.correct(Xb, d / np.linalg.norm(d), mb, a["A"], jacobian=False)
+            if Xb is not None:
+                # no Jacobian: the map is not differentiable here, and the special point takes the
+                # multiplier of the point before (detect)
+                return {"param": Xb[-1] * self.span, "state": Xb[:-1] * self.scale, "mode": _copy(mb)}
         return b
 
 
