@@ -22,10 +22,13 @@ the model keeps the whole step (:mod:`.contact_loop`); the replay does the same:
 the rows coupled to a step's event contacts (the connected component of the modes'
 ``A`` and the contacts' coordinates) take the sub-steps, the others ``R(h A)``.
 Guard gradients and reset Jacobians are central differences of the compiled guards
-and transitions (affine within a mode, so their error is rounding), as are the
-sub-steps' derivatives in their start time and length (their error, about
-``1e-12`` of the step, is far below what a difference quotient of the whole map
-resolves).
+and transitions (affine within a mode, so their error is rounding); the sub-steps'
+derivatives in their start time and length follow from the stages, ``A`` and the
+forcing's rate ``b'(t)``, a central difference in time (its error, about ``1e-12``
+relative, is far below what a difference quotient of the whole map resolves). A
+mode whose flow is not affine (a law whose force is nonlinear within a mode) is
+found by a probe and refused (:class:`ContactTangentError`): the period map then
+falls back to differences.
 """
 
 from __future__ import annotations
@@ -47,6 +50,7 @@ _KEEP = 4
 
 
 def _caches(integrator) -> dict:
+    """The kept matrices of ``integrator``'s model structure (the generated module and the integer tables)."""
     h = hashlib.sha1(integrator.module.__name__.encode())
     h.update(np.ascontiguousarray(integrator.I).tobytes())
     key = h.hexdigest()
@@ -55,11 +59,6 @@ def _caches(integrator) -> dict:
     while len(_CACHES) > _KEEP:
         _CACHES.popitem(last=False)
     return c
-
-
-def _agrees(change: float, predicted: float, size: float) -> bool:
-    """Whether a function's change along a probe is the one its kept derivative predicts (affine: to rounding)."""
-    return abs(change - predicted) <= 1e-7 * size
 
 
 class ContactTangentError(RuntimeError):
