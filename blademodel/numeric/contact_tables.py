@@ -223,12 +223,13 @@ class NumericTables:
                 self.cgr[j, k] = ev(c["gr"][k])
             for k, name in enumerate(c["law"]):
                 self.LP[j, k] = pos[name]
-        G = np.zeros((nc, n))
+        #: each contact's relative-slip gradient in the coordinates (rows: contacts)
+        self.G = np.zeros((nc, n))
         for j in range(nc):
             for k in range(4):
                 if self.cidx[j, k] >= 0:
-                    G[j, self.cidx[j, k]] += self.cgr[j, k]
-        self.W = (G * self.invm) @ G.T
+                    self.G[j, self.cidx[j, k]] += self.cgr[j, k]
+        self.W = (self.G * self.invm) @ self.G.T
         self.claw = np.array(law_kind, dtype=np.int64)
         self.cso = np.array(state_offset, dtype=np.int64)
         self.p = np.array([values[name] for name in param_order], dtype=float)

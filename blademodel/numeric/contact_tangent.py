@@ -38,7 +38,7 @@ from collections import OrderedDict
 
 import numpy as np
 
-from . import contract as C
+from .tangent import SensitivityError
 
 
 #: The modes' matrices, guard gradients and reset Jacobians of the last few model structures. They depend
@@ -61,7 +61,7 @@ def _caches(integrator) -> dict:
     return c
 
 
-class ContactTangentError(RuntimeError):
+class ContactTangentError(SensitivityError):
     """The replay cannot differentiate this run (a grazing event, or a mode that is not affine)."""
 
 
@@ -95,13 +95,9 @@ class ContactTangent:
         self.ig = integrator
         self.mod = integrator.module
         self.n = integrator.n_physical
-        I, R = integrator.I, integrator.R
-        self.nq = int(I[C.H_N])
-        self.nc = int(I[C.H_NC])
-        self.cidx = np.asarray(I[I[C.O_CIDX]:I[C.O_CIDX] + 4 * self.nc])
-        self.cgr = np.asarray(R[I[C.R_GR]:I[C.R_GR] + 4 * self.nc])
-        self.invm = np.asarray(R[I[C.R_INVM]:I[C.R_INVM] + self.nq])
-        self.claw = np.asarray(I[I[C.O_CLAW]:I[C.O_CLAW] + self.nc])
+        self.tables = integrator.tables
+        self.nq = self.tables.n
+        self.nc = len(self.tables.claw)
         method = integrator.method
         self._b, self._a, self._c = method.b, method.A, method.c
         self._poly = method.amplification_coefficients()
@@ -116,21 +112,46 @@ class ContactTangent:
 
     # --- the pieces -------------------------------------------------------------------------------
     def _contact_rows(self, j: int) -> list:
-        q = [int(i) for i in self.cidx[4 * j:4 * j + 4] if i >= 0]
+        """The state rows of contact ``j``'s coordinates: positions, then velocities."""
+        q = sorted({int(i) for i in self.tables.cidx[j] if i >= 0})
         return q + [self.nq + i for i in q]
 
-    def _rhs(self, t, y, cm):
-        """``dy/dt`` in ``cm`` (the stick problem factored once for consecutive calls in one mode)."""
-        ig = self.ig
+    def _factor(self, cm) -> None:
+        """The stick problem of ``cm`` factored in the work arrays (once for consecutive calls in one mode)."""
         key = cm.tobytes()
         if self._factored != key:
+            ig = self.ig
             self.mod.factor_stick(cm, ig.I, ig.R, ig.WI, ig.WF)
             self._factored = key
+
+    def _rhs(self, t, y, cm):
+        """``dy/dt`` in ``cm``."""
+        ig = self.ig
+        self._factor(cm)
         out = np.empty(ig.n_state)
         self.mod.rhs(float(t), y, cm, ig.I, ig.R, ig.WI, ig.WF, out)
         return out
 
-    def flow_matrix(self, cm, y=None) -> np.ndarray:
+    @staticmethod
+    def _linear_along(f, y, probe, predicted, tol: float = 1e-7) -> bool:
+        """Whether ``f(y + probe) - f(y - probe)`` is ``2 predicted`` (a kept derivative along the probe), to ``tol``."""
+        change = np.atleast_1d(f(y + probe) - f(y - probe))
+        size = np.max(np.abs(change)) + np.max(np.abs(predicted))
+        return bool(np.max(np.abs(change - 2.0 * np.atleast_1d(predicted))) <= tol * size)
+
+    @staticmethod
+    def _columns(f, y, indices, steps) -> np.ndarray:
+        """Central differences of ``f`` in the states ``indices`` of ``y`` (a column each, ``f``'s shape by index)."""
+        cols = []
+        for i, e in zip(indices, steps):
+            yp = y.copy()
+            yp[i] += e
+            ym = y.copy()
+            ym[i] -= e
+            cols.append((f(yp) - f(ym)) / (2 * e))
+        return np.array(cols).T
+
+    def flow_matrix(self, cm, y) -> np.ndarray:
         """``A = df/dy`` of the physical states in the contact modes ``cm`` (kept per mode).
 
         Built from ``n + 1`` calls of ``rhs`` at the zero state. Before a kept or new
@@ -169,14 +190,14 @@ class ContactTangent:
     def _flow_agrees(self, A, cm, y) -> bool:
         """Whether ``f(y + p) - f(y - p) = 2 A p`` for the probe ``p`` (scaled to ``y``), to rounding."""
         n = self.n
-        base = np.zeros(self.ig.n_state) if y is None else np.asarray(y, dtype=float).copy()
-        size = max(float(np.max(np.abs(base[:n]))), 1.0 if y is None else 1e-300)
+        base = np.asarray(y, dtype=float).copy()
+        size = max(float(np.max(np.abs(base[:n]))), 1e-300)
         p = np.zeros_like(base)
         p[:n] = 1e-3 * size * self._probe
-        change = self._rhs(0.0, base + p, cm)[:n] - self._rhs(0.0, base - p, cm)[:n]
-        return bool(np.max(np.abs(change - 2.0 * A @ p[:n])) <= 1e-8 * np.max(np.abs(A) @ np.abs(p[:n])))
+        return self._linear_along(lambda z: self._rhs(0.0, z, cm)[:n], base, p, A @ p[:n], tol=1e-8)
 
-    def _step_matrix(self, h: float, cm, rows=None, y=None) -> np.ndarray:
+    def _step_matrix(self, h: float, cm, y, rows=None) -> np.ndarray:
+        """``R(hA)`` of the mode ``cm`` (``y``: a state where it holds), or its block of ``rows``."""
         if rows is None:
             key = (h, cm.tobytes())
             M = self._R.get(key)
@@ -230,10 +251,7 @@ class ContactTangent:
 
     def _guard(self, t, y, cm, j, gi) -> float:
         ig = self.ig
-        key = cm.tobytes()
-        if self._factored != key:
-            self.mod.factor_stick(cm, ig.I, ig.R, ig.WI, ig.WF)
-            self._factored = key
+        self._factor(cm)
         self.mod.guards_at(float(t), y, cm, ig.I, ig.R, ig.WI, ig.WF, self._G)
         return float(self._G[j, gi])
 
@@ -249,31 +267,29 @@ class ContactTangent:
         gt = (self._guard(t + d, y, cm, j, gi) - self._guard(t - d, y, cm, j, gi)) / (2 * d)
         key = (cm.tobytes(), int(j), int(gi))
         gy = self._gy.get(key)
+
+        def g(z):
+            return self._guard(t, z, cm, j, gi)
+
+        steps = 1e-6 * np.maximum(np.abs(y[rows]), 1e-3 * np.max(np.abs(y[rows])))
         if gy is not None:
             probe = np.zeros_like(y)
-            probe[rows] = 1e-6 * np.maximum(np.abs(y[rows]), 1e-3 * np.max(np.abs(y[rows])))
-            change = self._guard(t, y + probe, cm, j, gi) - self._guard(t, y - probe, cm, j, gi)
-            if abs(change - 2.0 * float(gy[rows] @ probe[rows])) <= 1e-7 * (abs(change) + float(np.abs(gy[rows]) @ np.abs(probe[rows]))):
+            probe[rows] = steps
+            if self._linear_along(g, y, probe, gy[rows] @ steps):
                 return gy, gt
         gy = np.zeros(self.n)
-        for i in rows:
-            e = 1e-6 * max(abs(y[i]), 1e-3 * np.max(np.abs(y[rows])), 1e-300)
-            yp = y.copy()
-            yp[i] += e
-            ym = y.copy()
-            ym[i] -= e
-            gy[i] = (self._guard(t, yp, cm, j, gi) - self._guard(t, ym, cm, j, gi)) / (2 * e)
+        gy[rows] = self._columns(g, y, rows, steps)
         self._gy[key] = gy
         return gy, gt
 
     def _rigid_stick(self, j: int, m: int) -> bool:
-        K = int(self.claw[j])
+        K = int(self.tables.claw[j])
         return bool(self.mod.IS_STICK[K, m]) and int(self.mod.RIGID[K, 0]) == m
 
     def _reset_jacobian(self, t, y, cm, j, gi):
         """``d y+ / d y`` of contact ``j``'s transition by guard ``gi`` and the state after it; None: no law state."""
         ig = self.ig
-        if int(self.mod.NSTATES[int(self.claw[j])]) == 0:
+        if int(self.mod.NSTATES[int(self.tables.claw[j])]) == 0:
             return None, y
 
         def fire(yy):
@@ -282,44 +298,28 @@ class ContactTangent:
             self.mod.transition_at(float(t), yy, cm.copy(), int(j), int(gi), ig.I, ig.R, ig.WI, ig.WF, self._G)
             return yy
 
+        n = self.n
         key = (cm.tobytes(), int(j), int(gi))
         Rj = self._reset.get(key)
+        steps = 1e-6 * np.maximum(np.abs(y[:n]), 1e-3 * max(float(np.max(np.abs(y[:n]))), 1e-300))
         if Rj is not None and key not in self._checked:
-            size = max(float(np.max(np.abs(y[:self.n]))), 1e-300)
             probe = np.zeros_like(y)
-            probe[:self.n] = 1e-6 * size * self._probe
-            change = fire(y + probe)[:self.n] - fire(y - probe)[:self.n]
-            if np.max(np.abs(change - 2.0 * Rj @ probe[:self.n])) > 1e-7 * np.max(np.abs(Rj) @ np.abs(probe[:self.n])):
+            probe[:n] = steps * self._probe
+            if not self._linear_along(lambda z: fire(z)[:n], y, probe, Rj @ probe[:n]):
                 Rj = None
         self._checked.add(key)
         if Rj is None:
-            n = self.n
-            Rj = np.empty((n, n))
-            size = max(float(np.max(np.abs(y[:n]))), 1e-300)
-            for i in range(n):
-                e = 1e-6 * max(abs(y[i]), 1e-3 * size)
-                yp = y.copy()
-                yp[i] += e
-                ym = y.copy()
-                ym[i] -= e
-                Rj[:, i] = (fire(yp)[:n] - fire(ym)[:n]) / (2 * e)
-            self._reset[key] = Rj
+            Rj = self._reset[key] = self._columns(lambda z: fire(z)[:n], y, range(n), steps)
         return Rj, fire(y)
 
     def _projection(self, contacts) -> np.ndarray:
         """The kernel's projection of the velocities onto zero slip of ``contacts``: ``u -= M^-1 G^T W^+ G u``."""
         nq = self.nq
-        G = np.zeros((len(contacts), nq))
-        for a, j in enumerate(contacts):
-            for q in range(4):
-                i = self.cidx[4 * j + q]
-                if i >= 0:
-                    G[a, i] += self.cgr[4 * j + q]
-        MG = self.invm[:, None] * G.T
+        G = self.tables.G[contacts]
+        MG = self.tables.invm[:, None] * G.T
         # a closed ring that sticks makes W singular; G^T x is the same for every solution
-        Pv = np.eye(nq) - MG @ np.linalg.pinv(G @ MG) @ G
         P = np.eye(self.n)
-        P[nq:2 * nq, nq:2 * nq] = Pv
+        P[nq:2 * nq, nq:2 * nq] -= MG @ np.linalg.pinv(G @ MG) @ G
         return P
 
     def _clusters(self, mats, seeds) -> list:
@@ -375,7 +375,7 @@ class ContactTangent:
             t0, t1 = float(rec_t[k]), float(rec_t[k + 1])
             cm0 = rec_cm[k].astype(np.int64)
             if not (ie < n_log and lt[ie] <= t1):
-                V = self._step_matrix(H, cm0, y=rec_y[k]) @ V
+                V = self._step_matrix(H, cm0, rec_y[k]) @ V
                 continue
             i0 = ie
             while ie < n_log and lt[ie] <= t1:
@@ -391,7 +391,7 @@ class ContactTangent:
             if not np.array_equal(cmx, rec_cm[k + 1]):
                 raise ContactTangentError(f"the event log disagrees with the record at t = {t1:.9g}")
             seeds = sorted({int(lc[i]) for i in order})
-            Vn = self._step_matrix(H, cm0) @ V
+            Vn = self._step_matrix(H, cm0, rec_y[k]) @ V
             for rows in self._clusters(mats, seeds):
                 inside = set(rows.tolist())
                 events = [i for i in order if self._rows[int(lc[i])][0] in inside]
@@ -417,7 +417,7 @@ class ContactTangent:
                 group.append((int(lc[i]), int(lg[i]), int(lto[i])))
                 q += 1
             ye, Pt, Ph = self._substep_derivatives(ta, ya, te - ta, cm, H)
-            W = self._step_matrix(te - ta, cm, rows) @ Vc + np.outer((Pt - Ph)[rows], dta)
+            W = self._step_matrix(te - ta, cm, ya, rows) @ Vc + np.outer((Pt - Ph)[rows], dta)
             fired = next(((j, gi) for j, gi, _ in group if gi >= 0), None)
             if fired is None:
                 dtb = np.zeros(n)
@@ -440,4 +440,4 @@ class ContactTangent:
                 Vc = self._projection(stick)[np.ix_(rows, rows)] @ Vc
             ta, ya, cm, dta = te, ye, cm2, dtb
         _, Pt, Ph = self._substep_derivatives(ta, ya, t1 - ta, cm, H)
-        return self._step_matrix(t1 - ta, cm, rows) @ Vc + np.outer((Pt - Ph)[rows], dta)
+        return self._step_matrix(t1 - ta, cm, ya, rows) @ Vc + np.outer((Pt - Ph)[rows], dta)

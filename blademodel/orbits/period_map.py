@@ -171,7 +171,7 @@ class PeriodMap:
         ----------
         y : array_like
             Physical start state.
-        mode : int
+        mode : int or ndarray
         dp : array_like, optional
             The direction ``d p / d lambda`` in the raw parameters.
         dperiod : float
@@ -185,25 +185,25 @@ class PeriodMap:
         Raises
         ------
         SensitivityError
-            Where the tangent cannot follow the flow.
+            Where the tangent cannot follow the flow (on the per-contact kernel also
+            :class:`~blademodel.numeric.contact_tangent.ContactTangentError`, a subclass, and
+            for any ``dp``: its tangent is in the state only).
         """
         from ..numeric.tangent import FlowSensitivity, SensitivityError, flow_sensitivity, settle_jacobian
         ig = self.integrator
+        contact = ig.kernel == "contact"
+        if contact and dp is not None:
+            raise SensitivityError("parameter derivatives by the tangent need the product-mode kernel")
         try:
             r = self.run(y, mode)
         except FlowError as e:
             raise SensitivityError(str(e)) from None
         self.replays += 1
-        if ig.kernel == "contact":
-            from ..numeric.contact_tangent import ContactTangent, ContactTangentError
-            if dp is not None:
-                raise SensitivityError("parameter derivatives by the tangent need the product-mode kernel")
+        if contact:
+            from ..numeric.contact_tangent import ContactTangent
             if self._contact_tangent is None:
                 self._contact_tangent = ContactTangent(ig)
-            try:
-                M = self._contact_tangent.monodromy(r.t, r.states, r.modes, r.log, r.n_log)
-            except ContactTangentError as e:
-                raise SensitivityError(str(e)) from None
+            M = self._contact_tangent.monodromy(r.t, r.states, r.modes, r.log, r.n_log)   # or ContactTangentError
             return FlowSensitivity(state=r.end[:self.n].copy(), mode=_copy(r.mode_end), monodromy=M, parameter=None,
                                    events=r.n_log)
         s = flow_sensitivity(ig, r.start[:self.n], r.mode, self.periods, dp=dp, dperiod=dperiod,
