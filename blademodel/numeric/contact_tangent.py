@@ -21,8 +21,9 @@ The kernel steps each *cluster* of an event through its sub-steps while the rest
 the model keeps the whole step (:mod:`.contact_loop`); the replay does the same:
 the rows coupled to a step's event contacts (the connected component of the modes'
 ``A`` and the contacts' coordinates) take the sub-steps, the others ``R(h A)``.
-Guard gradients and reset Jacobians are central differences of the compiled guards
-and transitions (affine within a mode, so their error is rounding); the sub-steps'
+Guard gradients are differences of the compiled guards at the zero state, as ``A`` is
+(affine within a mode, so their error is rounding; checked at each event), reset
+Jacobians central differences of the compiled transitions at the event; the sub-steps'
 derivatives in their start time and length follow from the stages, ``A`` and the
 forcing's rate ``b'(t)``, a central difference in time (its error, about ``1e-12``
 relative, is far below what a difference quotient of the whole map resolves). A
@@ -41,20 +42,37 @@ import numpy as np
 from .tangent import SensitivityError
 
 
-#: The modes' matrices, guard gradients and reset Jacobians of the last few model structures. They depend
-#: on parameter values too, so every one is checked, before its first use by a :class:`ContactTangent`,
-#: against the compiled functions along a probe direction: a continuation in the excitation frequency (or
-#: the force, or the gap), which changes ``b(t)`` only, reuses them from point to point.
+#: The modes' matrices and guard gradients of the last few models, by what they are computed from
+#: (:func:`_cache_key`): a continuation in the excitation frequency reuses them from point to point, and
+#: a kept one is the one a fresh computation would give, bit for bit, so a branch does not depend on
+#: what was computed before it.
 _CACHES: OrderedDict = OrderedDict()
 _KEEP = 4
 
 
-def _caches(integrator) -> dict:
-    """The kept matrices of ``integrator``'s model structure (the generated module and the integer tables)."""
+def _cache_key(integrator) -> str:
+    """A digest of everything ``rhs`` and the guards read at ``t = 0``: the generated module, the integer
+    tables and the values, without the excitation frequencies and the forcing's phase table (at ``t = 0``
+    every forcing term is ``A sin(phi)``, whatever its frequency) and without the parameters no friction
+    law reads (the frequency among them)."""
+    from . import contract as C
+    I, R, tables = integrator.I, integrator.R.copy(), integrator.tables
+    R[int(I[C.R_OM]):int(I[C.R_GN])] = 0.0
+    R[int(I[C.R_TG]):] = 0.0
+    p = R[int(I[C.R_P]):int(I[C.R_P]) + tables.p.size]
+    unread = np.ones(p.size, dtype=bool)
+    unread[np.unique(tables.LP)] = False
+    p[unread] = 0.0
     h = hashlib.sha1(integrator.module.__name__.encode())
-    h.update(np.ascontiguousarray(integrator.I).tobytes())
-    key = h.hexdigest()
-    c = _CACHES.pop(key, None) or {"A": {}, "gy": {}, "reset": {}}
+    h.update(np.ascontiguousarray(I).tobytes())
+    h.update(R.tobytes())
+    return h.hexdigest()
+
+
+def _caches(integrator) -> dict:
+    """The kept matrices of ``integrator``'s model and values (:func:`_cache_key`)."""
+    key = _cache_key(integrator)
+    c = _CACHES.pop(key, None) or {"A": {}, "gy": {}}
     _CACHES[key] = c
     while len(_CACHES) > _KEEP:
         _CACHES.popitem(last=False)
@@ -102,8 +120,8 @@ class ContactTangent:
         self._b, self._a, self._c = method.b, method.A, method.c
         self._poly = method.amplification_coefficients()
         caches = _caches(integrator)
-        self._A, self._gy, self._reset = caches["A"], caches["gy"], caches["reset"]
-        self._checked: set = set()   # keys of kept matrices checked against this integrator
+        self._A, self._gy = caches["A"], caches["gy"]
+        self._checked: set = set()   # modes whose kept matrix this object has checked for affinity
         self._probe = np.random.default_rng(0).uniform(-1.0, 1.0, self.n)
         self._factored = None   # the contact modes the stick problem in the work arrays is factored for
         self._R: dict = {}
@@ -154,25 +172,18 @@ class ContactTangent:
     def flow_matrix(self, cm, y) -> np.ndarray:
         """``A = df/dy`` of the physical states in the contact modes ``cm`` (kept per mode).
 
-        Built from ``n + 1`` calls of ``rhs`` at the zero state. Before a kept or new
-        matrix is first used by this object, the flow's change along a probe direction
-        at ``y`` (a state where the mode holds) is checked against ``A``: a kept matrix
-        of other parameter values is built again, and a mode that is not affine (a
-        friction law whose force is not linear within a mode) raises
-        :class:`ContactTangentError`.
+        Built from ``n + 1`` calls of ``rhs`` at the zero state. Before its first use by
+        this object the flow's change along a probe direction at ``y`` (a state where the
+        mode holds) is checked against ``A``: a mode that is not affine (a friction law
+        whose force is not linear within a mode) raises :class:`ContactTangentError`.
         """
         key = cm.tobytes()
         A = self._A.get(key)
-        fresh = A is None
-        if fresh:
+        if A is None:
             A = self._A[key] = self._build_flow_matrix(cm)
         if key not in self._checked:
             if not self._flow_agrees(A, cm, y):
-                if fresh:
-                    raise ContactTangentError(f"the flow in contact modes {cm.tolist()} is not affine in the state")
-                A = self._A[key] = self._build_flow_matrix(cm)
-                if not self._flow_agrees(A, cm, y):
-                    raise ContactTangentError(f"the flow in contact modes {cm.tolist()} is not affine in the state")
+                raise ContactTangentError(f"the flow in contact modes {cm.tolist()} is not affine in the state")
             self._checked.add(key)
         return A
 
@@ -258,38 +269,54 @@ class ContactTangent:
     def _guard_gradient(self, t, y, cm, j, gi, rows, H):
         """``g_y`` on ``rows`` and ``g_t`` of contact ``j``'s guard ``gi`` in ``cm``.
 
-        A guard is affine in the state within a mode, so its gradient is kept per mode
-        and guard; each reuse is checked by the guard's change along one direction
-        (where the joint stick forces of a closed ring make it piecewise affine, the
-        gradient is taken afresh).
+        A guard is affine in the state within a mode: its gradient is taken once per mode
+        and guard at the zero state (as ``A`` is, so it does not depend on where it was
+        first needed) and checked at ``y`` along a probe at every use; where that fails
+        (the joint stick forces of a closed ring make a guard piecewise affine) it is taken
+        by central differences at ``y``, and not kept.
         """
         d = 1e-6 * H
         gt = (self._guard(t + d, y, cm, j, gi) - self._guard(t - d, y, cm, j, gi)) / (2 * d)
         key = (cm.tobytes(), int(j), int(gi))
         gy = self._gy.get(key)
+        if gy is None:
+            zero = np.zeros(self.ig.n_state)
+            g0 = self._guard(0.0, zero, cm, j, gi)
+            gy = np.empty(self.n)
+            for i in range(self.n):
+                zero[i] = 1.0
+                gy[i] = self._guard(0.0, zero, cm, j, gi) - g0
+                zero[i] = 0.0
+            self._gy[key] = gy
 
         def g(z):
             return self._guard(t, z, cm, j, gi)
 
         steps = 1e-6 * np.maximum(np.abs(y[rows]), 1e-3 * np.max(np.abs(y[rows])))
-        if gy is not None:
-            probe = np.zeros_like(y)
-            probe[rows] = steps
-            if self._linear_along(g, y, probe, gy[rows] @ steps):
-                return gy, gt
-        gy = np.zeros(self.n)
-        gy[rows] = self._columns(g, y, rows, steps)
-        self._gy[key] = gy
-        return gy, gt
+        probe = np.zeros_like(y)
+        probe[rows] = steps
+        if self._linear_along(g, y, probe, gy[rows] @ steps):
+            return gy, gt
+        local = np.zeros(self.n)
+        local[rows] = self._columns(g, y, rows, steps)
+        return local, gt
 
     def _rigid_stick(self, j: int, m: int) -> bool:
         K = int(self.tables.claw[j])
         return bool(self.mod.IS_STICK[K, m]) and int(self.mod.RIGID[K, 0]) == m
 
-    def _reset_jacobian(self, t, y, cm, j, gi):
-        """``d y+ / d y`` of contact ``j``'s transition by guard ``gi`` and the state after it; None: no law state."""
+    def _reset_jacobian(self, t, y, cm, j, gi, rows):
+        """``d y+ / d y`` of contact ``j``'s transition by guard ``gi`` at ``y`` and the state after it; ``None`` and
+        ``y`` where the contact's law has no state to reset.
+
+        A transition writes its contact's law states only: the Jacobian is the identity
+        but for their rows, central differences of the transition in the cluster's
+        ``rows`` (what those states can depend on).
+        """
         ig = self.ig
-        if int(self.mod.NSTATES[int(self.tables.claw[j])]) == 0:
+        K = int(self.tables.claw[j])
+        n_states = int(self.mod.NSTATES[K])
+        if n_states == 0:
             return None, y
 
         def fire(yy):
@@ -299,17 +326,12 @@ class ContactTangent:
             return yy
 
         n = self.n
-        key = (cm.tobytes(), int(j), int(gi))
-        Rj = self._reset.get(key)
-        steps = 1e-6 * np.maximum(np.abs(y[:n]), 1e-3 * max(float(np.max(np.abs(y[:n]))), 1e-300))
-        if Rj is not None and key not in self._checked:
-            probe = np.zeros_like(y)
-            probe[:n] = steps * self._probe
-            if not self._linear_along(lambda z: fire(z)[:n], y, probe, Rj @ probe[:n]):
-                Rj = None
-        self._checked.add(key)
-        if Rj is None:
-            Rj = self._reset[key] = self._columns(lambda z: fire(z)[:n], y, range(n), steps)
+        own = np.arange(n_states) + 2 * self.nq + int(self.tables.cso[j])
+        cols = np.union1d(rows, own)
+        steps = 1e-6 * np.maximum(np.abs(y[cols]), 1e-3 * max(float(np.max(np.abs(y[:n]))), 1e-300))
+        Rj = np.eye(n)
+        Rj[own] = 0.0
+        Rj[np.ix_(own, cols)] = self._columns(lambda z: fire(z)[own], y, cols, steps)
         return Rj, fire(y)
 
     def _projection(self, contacts) -> np.ndarray:
@@ -431,7 +453,7 @@ class ContactTangent:
             cm2 = cm.copy()
             for j, gi, to in group:
                 if gi >= 0:
-                    Rj, ye = self._reset_jacobian(te, ye, cm2, j, gi)
+                    Rj, ye = self._reset_jacobian(te, ye, cm2, j, gi, rows)
                     if Rj is not None:
                         Vc = Rj[np.ix_(rows, rows)] @ Vc
                 cm2[j] = to
