@@ -14,7 +14,7 @@ import inspect
 
 from ..components.friction.base import FrictionLaw
 from . import (bracket, code_libraries, contact_clusters, contact_events, contact_flow, contact_guards, contact_locate,
-               contact_loop, contact_rigid_stubs, contact_stick)
+               contact_loop, contact_replay, contact_rigid_stubs, contact_stick)
 from .compiled import hash_sources
 from .law_codegen import law_code
 from .view_rewrite import direct_views
@@ -22,14 +22,14 @@ from .view_rewrite import direct_views
 #: The kernel's templates, in the order they are pasted (:mod:`.contact_loop` describes them);
 #: ``contact_rigid_stubs`` follows when no law kind has a rigid stick mode.
 TEMPLATES = (bracket, contact_flow, contact_stick, contact_guards, contact_locate, contact_events, contact_clusters,
-             contact_loop)
+             contact_loop, contact_replay)
 
 #: Functions compiled with Numba (``njit(cache=True)``).
 #: Functions called from Python: cached on disk with all they call compiled into them.
 #: The others are not cached on their own: a function loaded from the cache is a
 #: separate library that callers cannot inline, and each call to one cost ~0.4 us.
 _ENTRY_POINTS = ("integrate", "initial_modes", "rhs", "factor_stick", "forces", "law_energy", "guards_at",
-                 "transition_at")
+                 "transition_at", "substep_derivatives")
 
 #: Entry points that release the GIL while they run: a period map's difference quotients run
 #: in threads (:meth:`~blademodel.orbits.period_map.PeriodMap.differences`), each with its own
@@ -38,7 +38,8 @@ _NOGIL = ("integrate",)
 
 #: Entry points never called from compiled code: what they link becomes internal to them
 #: (:class:`~blademodel.numeric.code_libraries.EntryPointCompiler`).
-_TOP_LEVEL = ("integrate", "initial_modes", "rhs", "forces", "law_energy", "guards_at", "transition_at")
+_TOP_LEVEL = ("integrate", "initial_modes", "rhs", "forces", "law_energy", "guards_at", "transition_at",
+              "substep_derivatives")
 
 #: Helpers that return views of the flat buffers: inlined (a function compiled without
 #: reference counting may only return an array it was given).

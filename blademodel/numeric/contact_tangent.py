@@ -72,7 +72,7 @@ def _cache_key(integrator) -> str:
 def _caches(integrator) -> dict:
     """The kept matrices of ``integrator``'s model and values (:func:`_cache_key`)."""
     key = _cache_key(integrator)
-    c = _CACHES.pop(key, None) or {"A": {}, "gy": {}}
+    c = _CACHES.pop(key, None) or {"A": {}, "gy": {}, "blocks": {}, "clusters": {}}
     _CACHES[key] = c
     while len(_CACHES) > _KEEP:
         _CACHES.popitem(last=False)
@@ -124,9 +124,15 @@ class ContactTangent:
         self._checked: set = set()   # modes whose kept matrix this object has checked for affinity
         self._probe = np.random.default_rng(0).uniform(-1.0, 1.0, self.n)
         self._factored = None   # the contact modes the stick problem in the work arrays is factored for
+        self._blocks, self._cluster_sets = caches["blocks"], caches["clusters"]
         self._R: dict = {}
         self._G = np.zeros_like(integrator.GS[0])
         self._rows = [self._contact_rows(j) for j in range(self.nc)]
+        self._tableau = tuple(np.ascontiguousarray(x, dtype=float) for x in (method.A, method.b, method.c))
+        s, ns = self._b.size, integrator.n_state
+        # the compiled sub-step's work arrays: stages (full rows), their derivatives (cluster rows), states
+        self._work = (np.zeros((s, ns)), np.zeros((s, self.n)), np.zeros((s, self.n)), np.zeros((s, self.n)),
+                      np.zeros(ns), np.zeros(ns), np.zeros(ns))
 
     # --- the pieces -------------------------------------------------------------------------------
     def _contact_rows(self, j: int) -> list:
@@ -207,6 +213,15 @@ class ContactTangent:
         p[:n] = 1e-3 * size * self._probe
         return self._linear_along(lambda z: self._rhs(0.0, z, cm)[:n], base, p, A @ p[:n], tol=1e-8)
 
+    def _block(self, cm, y, rows) -> np.ndarray:
+        """``A``'s block on ``rows`` in the mode ``cm`` (kept, as ``A`` is)."""
+        A = self.flow_matrix(cm, y)
+        key = (cm.tobytes(), rows.tobytes())
+        Ar = self._blocks.get(key)
+        if Ar is None:
+            Ar = self._blocks[key] = np.ascontiguousarray(A[np.ix_(rows, rows)])
+        return Ar
+
     def _step_matrix(self, h: float, cm, y, rows=None) -> np.ndarray:
         """``R(hA)`` of the mode ``cm`` (``y``: a state where it holds), or its block of ``rows``."""
         if rows is None:
@@ -215,49 +230,25 @@ class ContactTangent:
             if M is None:
                 M = self._R[key] = stability_matrix(h * self.flow_matrix(cm, y), self._poly)
             return M
-        return stability_matrix(h * self.flow_matrix(cm, y)[np.ix_(rows, rows)], self._poly)
+        return stability_matrix(h * self._block(cm, y, rows), self._poly)
 
-    def _substep_derivatives(self, t, y, h, cm, H):
-        """The method's sub-step of length ``h`` from ``(t, y)`` in ``cm``: its end (the full state) and the
-        derivatives of the physical end in its start time and its length.
+    def _substep_derivatives(self, t, y, h, cm, H, rows):
+        """The method's sub-step of length ``h`` from ``(t, y)`` in ``cm``: its end (the full state) and, on the
+        cluster's ``rows``, the derivatives of its end in its start time and its length.
 
-        The flow is affine, ``f = A y + b(t)``: the stages' derivatives follow from
-        ``A`` and ``b'`` at the stages' times (a central difference of ``f(t, 0)``)::
-
-            dK_i/dh  = A dY_i/dh + c_i b'(T_i),   dY_i/dh  = sum_j a_ij (K_j + h dK_j/dh)
-            dK_i/dt0 = A dY_i/dt0 + b'(T_i),      dY_i/dt0 = h sum_j a_ij dK_j/dt0
+        Compiled (:mod:`.contact_replay`, which gives the formulas): the flow is affine,
+        ``f = A y + b(t)``, and the stages' derivatives follow from ``A``'s block on
+        ``rows`` and ``b'`` at the stages' times, a central difference of ``f(t, 0)``
+        with the step ``1e-6 H``.
         """
-        a, b, c = self._a, self._b, self._c
-        n = self.n
-        A = self.flow_matrix(cm, y)
-        d = 1e-6 * H
-        s = b.size
-        zero = np.zeros_like(y)
-        rates: dict = {}
-        K, Kh, Kt = [], [], []
-        for i in range(s):
-            Y = y.copy()
-            Yh = np.zeros(n)
-            Yt = np.zeros(n)
-            for j in range(i):
-                if a[i, j] != 0.0:
-                    Y += h * a[i, j] * K[j]
-                    Yh += a[i, j] * (K[j][:n] + h * Kh[j])
-                    Yt += h * a[i, j] * Kt[j]
-            T = t + c[i] * h
-            K.append(self._rhs(T, Y, cm))
-            bt = rates.get(c[i])
-            if bt is None:
-                bt = rates[c[i]] = (self._rhs(T + d, zero, cm)[:n] - self._rhs(T - d, zero, cm)[:n]) / (2 * d)
-            Kh.append(A @ Yh + c[i] * bt)
-            Kt.append(A @ Yt + bt)
-        end = y.copy()
-        Ph = np.zeros(n)
-        Pt = np.zeros(n)
-        for i in range(s):
-            end += h * b[i] * K[i]
-            Ph += b[i] * (K[i][:n] + h * Kh[i])
-            Pt += h * b[i] * Kt[i]
+        ig = self.ig
+        self._factor(cm)
+        Ar = self._block(cm, y, rows)
+        end = np.empty(ig.n_state)
+        Pt = np.empty(rows.size)
+        Ph = np.empty(rows.size)
+        self.mod.substep_derivatives(float(t), y, float(h), cm, 1e-6 * H, Ar, rows, *self._tableau, ig.I, ig.R, ig.WI,
+                                     ig.WF, *self._work, end, Pt, Ph)
         return end, Pt, Ph
 
     def _guard(self, t, y, cm, j, gi) -> float:
@@ -344,12 +335,17 @@ class ContactTangent:
         P[nq:2 * nq, nq:2 * nq] -= MG @ np.linalg.pinv(G @ MG) @ G
         return P
 
-    def _clusters(self, mats, seeds) -> list:
-        """The rows of each cluster of the event contacts ``seeds``: what the modes' ``A`` (any of ``mats``) and the
-        contacts' own coordinates couple to them, transitively."""
+    def _clusters(self, modes, seeds, y) -> list:
+        """``(rows, contacts)`` of each cluster of the event contacts ``seeds`` in a step through ``modes``: the
+        state rows that the modes' ``A`` and the contacts' own coordinates couple to them, transitively, and the
+        contacts whose coordinates are among them (kept by the modes and seeds)."""
+        key = (b"".join(cm.tobytes() for cm in modes), seeds)
+        found = self._cluster_sets.get(key)
+        if found is not None:
+            return found
         coupled = np.zeros((self.n, self.n), dtype=bool)
-        for A in mats:
-            coupled |= A != 0
+        for cm in modes:
+            coupled |= self.flow_matrix(cm, y) != 0
         coupled |= coupled.T
         for j in seeds:
             r = self._rows[j]
@@ -366,7 +362,9 @@ class ContactTangent:
                     break
                 reach = grown
             seen |= reach
-            clusters.append(np.flatnonzero(reach))
+            contacts = tuple(c for c in range(self.nc) if reach[self._rows[c][0]])
+            clusters.append((np.flatnonzero(reach), contacts))
+        self._cluster_sets[key] = clusters
         return clusters
 
     # --- the replay -------------------------------------------------------------------------------
@@ -404,29 +402,27 @@ class ContactTangent:
                 ie += 1
             order = sorted(range(i0, ie), key=lambda i: lt[i])
             cmx = cm0.copy()
-            mats = [self.flow_matrix(cm0, rec_y[k])]
+            modes = [cm0]
             for i in order:
                 if cmx[lc[i]] != lf[i]:
                     raise ContactTangentError(f"the event log disagrees with the record at t = {lt[i]:.9g}")
                 cmx[lc[i]] = lto[i]
-                mats.append(self.flow_matrix(cmx, rec_y[k]))
+                modes.append(cmx.copy())
             if not np.array_equal(cmx, rec_cm[k + 1]):
                 raise ContactTangentError(f"the event log disagrees with the record at t = {t1:.9g}")
-            seeds = sorted({int(lc[i]) for i in order})
+            seeds = tuple(sorted({int(lc[i]) for i in order}))
             Vn = self._step_matrix(H, cm0, rec_y[k]) @ V
-            for rows in self._clusters(mats, seeds):
-                inside = set(rows.tolist())
-                events = [i for i in order if self._rows[int(lc[i])][0] in inside]
-                Vn[rows] = self._cluster_step(V[rows], rows, events, log, t0, t1, rec_y[k], cm0, H)
+            for rows, contacts in self._clusters(modes, seeds, rec_y[k]):
+                events = [i for i in order if int(lc[i]) in contacts]
+                Vn[rows] = self._cluster_step(V[rows], rows, contacts, events, log, t0, t1, rec_y[k], cm0, H)
             V = Vn
         return V
 
-    def _cluster_step(self, Vc, rows, events, log, t0, t1, y0, cm0, H):
-        """The rows ``rows`` of a step's tangent through the cluster's ``events`` (log indices, in time order)."""
+    def _cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H):
+        """The rows ``rows`` of a step's tangent through the cluster's ``events`` (log indices, in time order);
+        ``in_cluster``: the contacts whose coordinates are in ``rows``."""
         lt, lc, lg, lf, lto = log
         n = self.n
-        inside = set(rows.tolist())
-        in_cluster = [j for j in range(self.nc) if self._rows[j][0] in inside]
         cm = cm0.copy()
         ta, ya = t0, y0.copy()
         dta = np.zeros(n)
@@ -438,18 +434,18 @@ class ContactTangent:
                 i = events[q]
                 group.append((int(lc[i]), int(lg[i]), int(lto[i])))
                 q += 1
-            ye, Pt, Ph = self._substep_derivatives(ta, ya, te - ta, cm, H)
-            W = self._step_matrix(te - ta, cm, ya, rows) @ Vc + np.outer((Pt - Ph)[rows], dta)
+            ye, Pt, Ph = self._substep_derivatives(ta, ya, te - ta, cm, H, rows)
+            W = self._step_matrix(te - ta, cm, ya, rows) @ Vc + np.outer(Pt - Ph, dta)
             fired = next(((j, gi) for j, gi, _ in group if gi >= 0), None)
             if fired is None:
                 dtb = np.zeros(n)
             else:
                 gy, gt = self._guard_gradient(te, ye, cm, *fired, rows, H)
-                rate = gt + float(gy[rows] @ Ph[rows])
+                rate = gt + float(gy[rows] @ Ph)
                 if rate == 0.0 or not np.isfinite(rate):
                     raise ContactTangentError(f"a grazing event at t = {te:.9g} (its guard has no rate)")
                 dtb = -(gy[rows] @ W) / rate
-            Vc = W + np.outer(Ph[rows], dtb)
+            Vc = W + np.outer(Ph, dtb)
             cm2 = cm.copy()
             for j, gi, to in group:
                 if gi >= 0:
@@ -461,5 +457,5 @@ class ContactTangent:
                 stick = [j for j in in_cluster if self._rigid_stick(j, cm2[j])]
                 Vc = self._projection(stick)[np.ix_(rows, rows)] @ Vc
             ta, ya, cm, dta = te, ye, cm2, dtb
-        _, Pt, Ph = self._substep_derivatives(ta, ya, t1 - ta, cm, H)
-        return self._step_matrix(t1 - ta, cm, ya, rows) @ Vc + np.outer((Pt - Ph)[rows], dta)
+        _, Pt, Ph = self._substep_derivatives(ta, ya, t1 - ta, cm, H, rows)
+        return self._step_matrix(t1 - ta, cm, ya, rows) @ Vc + np.outer(Pt - Ph, dta)
