@@ -109,6 +109,40 @@ def test_a_ring_integrator_with_new_parameters_is_the_one_built_for_them(update)
         ig.with_parameters(cfg.model_copy(update={"gamma": 1e5}).build())
 
 
+def test_a_ring_integrator_takes_parameter_values_as_with_parameters_does():
+    """The per-contact kernel's ``with_parameter_values`` (no model built): the same tables, period and run as
+    ``with_parameters``, bit for bit; a wrong vector is refused naming the parameters, a stiff contact's step
+    as at construction; and a continuation of a ring in omega moves its parameters along the field's path."""
+    from blademodel.config import BladedDisk
+    from blademodel.orbits.arclength import _Family
+    cfg = BladedDisk(blades=4, engine_order=1, friction="bilinear", mistuning=[0, 0.03, -0.02, 0.01])
+    ig = make_integrator(cfg.build())
+    model = cfg.model_copy(update={"omega": 283.0, "mu": 0.25}).build()
+    a = ig.with_parameters(model)
+    b = ig.with_parameter_values([model.parameters[k] for k in ig.meta["params"]], 2 * math.pi / 283.0)
+    assert a.period == b.period and np.array_equal(a.R, b.R) and np.array_equal(a.I, b.I)
+    assert a.flow_digest() == b.flow_digest() != ig.flow_digest()   # mu moves the friction law's values
+    ends = []
+    for g in (a, b):
+        y = g.initial_state()
+        status, mode, _ = g.advance(y, g.mode_of(y), 0, 10)
+        ends.append((status, y, mode))
+    assert ends[0][0] == ends[1][0] == 0
+    assert np.array_equal(ends[0][1], ends[1][1]) and np.array_equal(ends[0][2], ends[1][2])
+    with pytest.raises(ValueError, match="one per parameter"):
+        ig.with_parameter_values([1.0, 2.0])
+    stiff = cfg.model_copy(update={"gamma": 1e5}).build()
+    with pytest.raises(StepTooLargeError, match="steps_per_period >="):
+        ig.with_parameter_values([stiff.parameters[k] for k in ig.meta["params"]])
+    # the frequency moves no mode's matrix: the digest (and so the kept stable step) stays
+    w = cfg.model_copy(update={"omega": 300.0}).build()
+    moved = ig.with_parameter_values([w.parameters[k] for k in ig.meta["params"]], 2 * math.pi / 300.0)
+    assert moved.flow_digest() == ig.flow_digest() and not np.array_equal(moved.R, ig.R)
+    fam = _Family(cfg, "omega", 1, {}, 280.0, bounds=(280.0, 290.0))
+    fam.map_at(280.0)
+    assert fam.path() is not None and fam.path().covers(285.0)
+
+
 @pytest.mark.parametrize("method", ["rk4", "rk8"])
 def test_a_certain_step_is_stable_up_to_the_first_root_on_each_ray(method):
     """``certain_step`` is the first positive root of ``|R(r lam)|^2 = 1`` over the eigenvalues: every step up to

@@ -289,7 +289,8 @@ class ContactIntegrator(Integrator):
         self.n_state = self.n_physical + (3 if energy else 0)
         self.energy = energy
         self.param_names = list(model.parameters)
-        self.tables = NumericTables(cached_tables(model), model.parameters, kind, offsets, self.param_names, pos)
+        self._table_source = cached_tables(model)   # the structure's tables (expressions); values fill them in
+        self.tables = NumericTables(self._table_source, model.parameters, kind, offsets, self.param_names, pos)
         self.meta = {"state": [*coords, *(f"v{c}" for c in coords), *names]
                      + (["W_in", "D_visc", "D_fric"] if energy else []),
                      "coordinates": coords, "params": self.param_names, "energy": energy,
@@ -320,19 +321,65 @@ class ContactIntegrator(Integrator):
     def _check_step(self) -> None:
         if self._check_stability:
             from .stability import check_step
-            h_max, which = self.max_stable_step()
+            key = ("limit", self.flow_digest())
+            if key not in self._step_limits:
+                self._step_limits[key] = self.max_stable_step()
+            h_max, which = self._step_limits[key]
             check_step(self.period, self.steps_per_period, h_max, which, self.method.name)
 
+    def flow_digest(self) -> str:
+        """A digest of everything the flow's right-hand side and guards read at ``t = 0``: the generated module,
+        the integer tables and the values, without the excitation frequencies and the forcing's phase table (at
+        ``t = 0`` every forcing term is ``A sin(phi)``, whatever its frequency) and without the parameters that
+        no friction law reads (the frequency among them).
+
+        Two integrators with the same digest have the same modes' matrices ``df/dy``
+        (and so the same stable step): a continuation in the excitation frequency keeps it.
+        """
+        I, R = self.I, self.R.copy()
+        R[int(I[contract.R_OM]):int(I[contract.R_GN])] = 0.0
+        R[int(I[contract.R_TG]):] = 0.0
+        p = R[int(I[contract.R_P]):int(I[contract.R_P]) + self.tables.p.size]
+        unread = np.ones(p.size, dtype=bool)
+        unread[np.unique(self.tables.LP)] = False
+        p[unread] = 0.0
+        h = hashlib.sha1(self.module.__name__.encode())
+        h.update(np.ascontiguousarray(I).tobytes())
+        h.update(R.tobytes())
+        return h.hexdigest()
+
     def _with_values_of(self, model: Model, period: float | None) -> "ContactIntegrator":
-        """The copy packs ``model``'s values into tables of its own and checks the step
-        from the modes' Jacobians, whose eigenvalue limits are computed once for each set
-        of them and shared by every copy (the excitation frequency, say, moves none)."""
+        return self.with_parameter_values([model.parameters[k] for k in self.param_names], period)
+
+    def with_parameter_values(self, p_raw, period: float | None = None) -> "ContactIntegrator":
+        """This integrator with the raw parameter values ``p_raw`` (in ``meta["params"]`` order).
+
+        The cheap form of :meth:`with_parameters` for callers that know the values
+        already (continuation, which moves one config field at every correction): no
+        model is built. ``period`` is the new excitation period (ignored if the period
+        was given explicitly; ``None`` keeps it). The copy packs the values into tables
+        of its own and checks the step from the modes' Jacobians, whose limit is computed
+        once for each :meth:`flow_digest` and shared by every copy (the excitation
+        frequency moves none).
+
+        Raises
+        ------
+        ValueError
+            If ``p_raw`` does not hold one finite value per parameter.
+        StepTooLargeError
+            If the step is unstable with the new parameters.
+        """
         from .integrator import StructureMismatch
+        p_raw = np.array(p_raw, dtype=float)
+        if p_raw.shape != (len(self.param_names),) or not np.all(np.isfinite(p_raw)):
+            raise ValueError(f"p_raw must hold {len(self.param_names)} finite values (one per parameter: "
+                             f"{', '.join(self.param_names)}), got {p_raw!r}")
         new = copy.copy(self)
-        if period is not None:
-            new.period = period
+        if period is not None and not self._explicit_period:
+            new.period = float(period)
         offsets, pos = self._layout
-        new.tables = NumericTables(cached_tables(model), model.parameters, self.kind, offsets, self.param_names, pos)
+        values = dict(zip(self.param_names, p_raw.tolist()))
+        new.tables = NumericTables(self._table_source, values, self.kind, offsets, self.param_names, pos)
         new._pack()
         if not np.array_equal(new.I, self.I):
             raise StructureMismatch("with_parameters: the model's tables are laid out differently "

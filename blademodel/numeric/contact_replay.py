@@ -1,4 +1,4 @@
-"""The per-contact kernel's sub-step derivatives, for the replayed tangent of its runs.
+"""The per-contact kernel's sub-step derivatives and guard differences, for the replayed tangent of its runs.
 
 A *template* (see :mod:`.contact_loop`), used by
 :class:`~blademodel.numeric.contact_tangent.ContactTangent` only: it is compiled
@@ -16,6 +16,10 @@ at ``y + h sum_i b_i K_i``. Its derivatives in its length and in its start time
 ``b'(T)`` is a central difference of ``f(T, 0)`` with the step ``d``. The
 derivatives are formed on ``rows`` only, the cluster's state rows, which ``A``
 couples to nothing outside (``Ar`` is ``A``'s block on them); the end state is whole.
+
+A guard that is affine only piecewise in the state (the joint stick forces of a
+closed ring) is differentiated by central differences at the event's state
+(``guard_columns``).
 """
 
 import math  # noqa: F401
@@ -91,3 +95,21 @@ def substep_derivatives(t, y, h, cm, d, Ar, rows, ta, tb, tc, I, R, WI, WF, K, K
             pt += h * tb[i] * Kt[i, r]
         Ph[r] = ph
         Pt[r] = pt
+
+
+def guard_columns(t, y, cm, j, gi, rows, steps, I, R, WI, WF, G, Y, out):
+    """Central differences of contact ``j``'s guard ``gi`` at ``(t, y)`` in ``cm`` in the states ``rows`` (steps
+    ``steps``) into ``out``: the guard's gradient where it is affine only piecewise (``Y``: a full state, work).
+    The stick problem of ``cm`` must be factored."""
+    for k in range(y.shape[0]):
+        Y[k] = y[k]
+    for r in range(rows.shape[0]):
+        i = rows[r]
+        e = steps[r]
+        Y[i] = y[i] + e
+        eval_guards(t, Y, cm, I, R, WI, WF, G)  # noqa: F821
+        gp = G[j, gi]
+        Y[i] = y[i] - e
+        eval_guards(t, Y, cm, I, R, WI, WF, G)  # noqa: F821
+        out[r] = (gp - G[j, gi]) / (2.0 * e)
+        Y[i] = y[i]

@@ -34,7 +34,6 @@ falls back to differences.
 
 from __future__ import annotations
 
-import hashlib
 from collections import OrderedDict
 
 import numpy as np
@@ -43,36 +42,17 @@ from .tangent import SensitivityError
 
 
 #: The modes' matrices and guard gradients of the last few models, by what they are computed from
-#: (:func:`_cache_key`): a continuation in the excitation frequency reuses them from point to point, and
-#: a kept one is the one a fresh computation would give, bit for bit, so a branch does not depend on
+#: (:meth:`~blademodel.numeric.contact_kernel.ContactIntegrator.flow_digest`): a continuation in the
+#: excitation frequency reuses them from point to point, and a kept one is the one a fresh computation would give, bit for bit, so a branch does not depend on
 #: what was computed before it.
 _CACHES: OrderedDict = OrderedDict()
 _KEEP = 4
 
 
-def _cache_key(integrator) -> str:
-    """A digest of everything ``rhs`` and the guards read at ``t = 0``: the generated module, the integer
-    tables and the values, without the excitation frequencies and the forcing's phase table (at ``t = 0``
-    every forcing term is ``A sin(phi)``, whatever its frequency) and without the parameters no friction
-    law reads (the frequency among them)."""
-    from . import contract as C
-    I, R, tables = integrator.I, integrator.R.copy(), integrator.tables
-    R[int(I[C.R_OM]):int(I[C.R_GN])] = 0.0
-    R[int(I[C.R_TG]):] = 0.0
-    p = R[int(I[C.R_P]):int(I[C.R_P]) + tables.p.size]
-    unread = np.ones(p.size, dtype=bool)
-    unread[np.unique(tables.LP)] = False
-    p[unread] = 0.0
-    h = hashlib.sha1(integrator.module.__name__.encode())
-    h.update(np.ascontiguousarray(I).tobytes())
-    h.update(R.tobytes())
-    return h.hexdigest()
-
-
 def _caches(integrator) -> dict:
-    """The kept matrices of ``integrator``'s model and values (:func:`_cache_key`)."""
-    key = _cache_key(integrator)
-    c = _CACHES.pop(key, None) or {"A": {}, "gy": {}, "blocks": {}, "clusters": {}}
+    """The kept matrices of ``integrator``'s model and values (its ``flow_digest``)."""
+    key = integrator.flow_digest()
+    c = _CACHES.pop(key, None) or {"A": {}, "gy": {}, "blocks": {}, "clusters": {}, "checked": set(), "projections": {}}
     _CACHES[key] = c
     while len(_CACHES) > _KEEP:
         _CACHES.popitem(last=False)
@@ -121,10 +101,10 @@ class ContactTangent:
         self._poly = method.amplification_coefficients()
         caches = _caches(integrator)
         self._A, self._gy = caches["A"], caches["gy"]
-        self._checked: set = set()   # modes whose kept matrix this object has checked for affinity
+        self._checked: set = caches["checked"]   # modes whose kept matrix was checked for affinity
         self._probe = np.random.default_rng(0).uniform(-1.0, 1.0, self.n)
         self._factored = None   # the contact modes the stick problem in the work arrays is factored for
-        self._blocks, self._cluster_sets = caches["blocks"], caches["clusters"]
+        self._blocks, self._cluster_sets, self._projections = caches["blocks"], caches["clusters"], caches["projections"]
         self._R: dict = {}
         self._G = np.zeros_like(integrator.GS[0])
         self._rows = [self._contact_rows(j) for j in range(self.nc)]
@@ -178,8 +158,9 @@ class ContactTangent:
     def flow_matrix(self, cm, y) -> np.ndarray:
         """``A = df/dy`` of the physical states in the contact modes ``cm`` (kept per mode).
 
-        Built from ``n + 1`` calls of ``rhs`` at the zero state. Before its first use by
-        this object the flow's change along a probe direction at ``y`` (a state where the
+        Built from ``n + 1`` calls of ``rhs`` at the zero state. Before its first use
+        (for these values, whatever the excitation frequency: the check is kept with
+        ``A``) the flow's change along a probe direction at ``y`` (a state where the
         mode holds) is checked against ``A``: a mode that is not affine (a friction law
         whose force is not linear within a mode) raises :class:`ContactTangentError`.
         """
@@ -288,8 +269,13 @@ class ContactTangent:
         probe[rows] = steps
         if self._linear_along(g, y, probe, gy[rows] @ steps):
             return gy, gt
+        ig = self.ig
+        cols = np.empty(rows.size)
+        self._factor(cm)
+        self.mod.guard_columns(float(t), y, cm, int(j), int(gi), rows, steps, ig.I, ig.R, ig.WI, ig.WF, self._G,
+                               self._work[4], cols)
         local = np.zeros(self.n)
-        local[rows] = self._columns(g, y, rows, steps)
+        local[rows] = cols
         return local, gt
 
     def _rigid_stick(self, j: int, m: int) -> bool:
@@ -324,6 +310,14 @@ class ContactTangent:
         Rj[own] = 0.0
         Rj[np.ix_(own, cols)] = self._columns(lambda z: fire(z)[own], y, cols, steps)
         return Rj, fire(y)
+
+    def _projection_block(self, contacts, rows) -> np.ndarray:
+        """:meth:`_projection`'s block on ``rows`` (kept: it depends on the geometry and the masses only)."""
+        key = (tuple(contacts), rows.tobytes())
+        P = self._projections.get(key)
+        if P is None:
+            P = self._projections[key] = np.ascontiguousarray(self._projection(contacts)[np.ix_(rows, rows)])
+        return P
 
     def _projection(self, contacts) -> np.ndarray:
         """The kernel's projection of the velocities onto zero slip of ``contacts``: ``u -= M^-1 G^T W^+ G u``."""
@@ -455,7 +449,7 @@ class ContactTangent:
                 cm2[j] = to
             if any(self._rigid_stick(j, cm2[j]) and not self._rigid_stick(j, cm[j]) for j in in_cluster):
                 stick = [j for j in in_cluster if self._rigid_stick(j, cm2[j])]
-                Vc = self._projection(stick)[np.ix_(rows, rows)] @ Vc
+                Vc = self._projection_block(stick, rows) @ Vc
             ta, ya, cm, dta = te, ye, cm2, dtb
         _, Pt, Ph = self._substep_derivatives(ta, ya, t1 - ta, cm, H, rows)
         return self._step_matrix(t1 - ta, cm, ya, rows) @ Vc + np.outer(Pt - Ph, dta)
