@@ -9,7 +9,8 @@ after the laws' functions and tables (``law_force``, ``law_rates``,
 the kinds): :mod:`.bracket`, :mod:`.contact_flow` (views, the active set, forces,
 ``dy/dt``, Runge-Kutta steps), :mod:`.contact_stick` (the coupled rigid stick),
 :mod:`.contact_guards`, :mod:`.contact_locate`, :mod:`.contact_events`,
-:mod:`.contact_clusters` and this loop. Nothing in them grows with the number of
+:mod:`.contact_clusters`, this loop, and :mod:`.contact_replay` (for the replayed tangent,
+compiled only when it is used). Nothing in them grows with the number of
 contacts: every contact holds one mode integer ``cm[j]`` and is handled by index.
 
 **A step.** The whole model takes the step (``h = period / steps_per_period``);

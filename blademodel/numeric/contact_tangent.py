@@ -70,8 +70,9 @@ def stability_matrix(hA: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
     (:meth:`~blademodel.numeric.methods.Method.amplification_coefficients`).
     """
     m = hA.shape[0]
-    out = coefficients[-1] * np.eye(m)
-    for c in coefficients[-2::-1]:   # Horner
+    out = coefficients[-1] * hA   # Horner, its first product (hA times a multiple of I) written out
+    out.flat[::m + 1] += coefficients[-2]
+    for c in coefficients[-3::-1]:
         out = hA @ out
         out.flat[::m + 1] += c
     return out
@@ -247,8 +248,6 @@ class ContactTangent:
         (the joint stick forces of a closed ring make a guard piecewise affine) it is taken
         by central differences at ``y``, and not kept.
         """
-        d = 1e-6 * H
-        gt = (self._guard(t + d, y, cm, j, gi) - self._guard(t - d, y, cm, j, gi)) / (2 * d)
         key = (cm.tobytes(), int(j), int(gi))
         gy = self._gy.get(key)
         if gy is None:
@@ -260,20 +259,14 @@ class ContactTangent:
                 gy[i] = self._guard(0.0, zero, cm, j, gi) - g0
                 zero[i] = 0.0
             self._gy[key] = gy
-
-        def g(z):
-            return self._guard(t, z, cm, j, gi)
-
-        steps = 1e-6 * np.maximum(np.abs(y[rows]), 1e-3 * np.max(np.abs(y[rows])))
-        probe = np.zeros_like(y)
-        probe[rows] = steps
-        if self._linear_along(g, y, probe, gy[rows] @ steps):
-            return gy, gt
         ig = self.ig
+        steps = 1e-6 * np.maximum(np.abs(y[rows]), 1e-3 * np.max(np.abs(y[rows])))
         cols = np.empty(rows.size)
         self._factor(cm)
-        self.mod.guard_columns(float(t), y, cm, int(j), int(gi), rows, steps, ig.I, ig.R, ig.WI, ig.WF, self._G,
-                               self._work[4], cols)
+        gt, kept = self.mod.guard_derivatives(float(t), y, cm, int(j), int(gi), rows, steps, 1e-6 * H, gy[rows],
+                                              ig.I, ig.R, ig.WI, ig.WF, self._G, self._work[4], cols)
+        if kept:
+            return gy, gt
         local = np.zeros(self.n)
         local[rows] = cols
         return local, gt
