@@ -40,6 +40,24 @@ import numpy as np
 
 from .tangent import SensitivityError
 
+#: The BLAS thread pools (``threadpoolctl``), found at the first replay.
+_POOLS = None
+
+
+def _one_blas_thread():
+    """A context in which numpy's BLAS runs in one thread.
+
+    The replay multiplies matrices of the ring's size (96 states at 24 blades) one after
+    the other: there OpenBLAS's threads cost more than they gain (measured, 96 x 96:
+    47 us in one thread, 62 us in two; the 24-blade ring from 270 to 300 rad/s: 70 s
+    and 69 s of CPU in one, 90 s and 154 s of CPU in two, the same branch to the bit).
+    """
+    global _POOLS
+    from threadpoolctl import ThreadpoolController
+    if _POOLS is None:
+        _POOLS = ThreadpoolController()
+    return _POOLS.limit(limits=1, user_api="blas")
+
 
 #: The modes' matrices and guard gradients of the last few models, by what they are computed from
 #: (:meth:`~blademodel.numeric.contact_kernel.ContactIntegrator.flow_digest`): a continuation in the
@@ -371,6 +389,10 @@ class ContactTangent:
             At an event whose guard has no rate along the flow (grazing), or where the
             log and the record disagree.
         """
+        with _one_blas_thread():
+            return self._monodromy(rec_t, rec_y, rec_cm, log, n_log)
+
+    def _monodromy(self, rec_t, rec_y, rec_cm, log, n_log: int) -> np.ndarray:
         n = self.n
         lt, lc, lg, lf, lto = log
         V = np.eye(n)
