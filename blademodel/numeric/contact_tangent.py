@@ -34,6 +34,7 @@ falls back to differences.
 
 from __future__ import annotations
 
+import contextlib
 from collections import OrderedDict
 
 import numpy as np
@@ -44,15 +45,23 @@ from .tangent import SensitivityError
 _POOLS = None
 
 
-def _one_blas_thread():
-    """A context in which numpy's BLAS runs in one thread.
+#: The most states for which the replay runs BLAS in one thread (:func:`_blas_threads_for`).
+ONE_THREAD_STATES = 128
 
-    The replay multiplies matrices of the ring's size (96 states at 24 blades) one after
-    the other: there OpenBLAS's threads cost more than they gain (measured, 96 x 96:
-    47 us in one thread, 62 us in two; the 24-blade ring from 270 to 300 rad/s: 70 s
-    and 69 s of CPU in one, 90 s and 154 s of CPU in two, the same branch to the bit).
+
+def _blas_threads_for(n: int):
+    """A context in which numpy's BLAS runs in one thread if the matrices are ``n <= ONE_THREAD_STATES`` square.
+
+    The replay multiplies matrices of the ring's size one after the other. At 96 states
+    (24 blades) OpenBLAS's two threads cost more than they gain (a product in 47 us in one
+    thread, 62 us in two; the 24-blade ring from 270 to 300 rad/s: 76 s and 96 s of CPU
+    with the replay in one thread, 90 s and 154 s in two, the same branch to the bit); at
+    192 (48 blades) they gain a little (352 us against 296 us, a warm Jacobian 0.60 s
+    against 0.46 s) for twice the CPU. Larger rings keep the threads.
     """
     global _POOLS
+    if n > ONE_THREAD_STATES:
+        return contextlib.nullcontext()
     from threadpoolctl import ThreadpoolController
     if _POOLS is None:
         _POOLS = ThreadpoolController()
@@ -389,7 +398,7 @@ class ContactTangent:
             At an event whose guard has no rate along the flow (grazing), or where the
             log and the record disagree.
         """
-        with _one_blas_thread():
+        with _blas_threads_for(self.n):
             return self._monodromy(rec_t, rec_y, rec_cm, log, n_log)
 
     def _monodromy(self, rec_t, rec_y, rec_cm, log, n_log: int) -> np.ndarray:
