@@ -513,3 +513,47 @@ def test_the_bilinear_pair_turns_back_only_at_its_folds():
     assert len(turns) == len(folds) == 8
     assert all(np.min(np.abs(folds - w)) < 0.2 for w in turns)
     assert np.min(np.abs(folds - 398.3718)) < 1e-3 and np.min(np.abs(folds - 398.4672)) < 1e-3
+
+
+class _SyntheticBranch:
+    """A straight branch ``X(s) = (s, s)``, ``s`` in ``[0, 1]``, whose one multiplier is ``mu(s)``: the location of a
+    stability change by :meth:`_Context._locate_crossing` without integrating anything."""
+
+    def __init__(self, mu):
+        from blademodel.orbits.arclength import _Context
+        self.mu, self.trials = mu, 0
+        ctx = _Context.__new__(_Context)
+        ctx.span = 1.0
+        ctx._corrected = self._corrected
+        ctx.multipliers = lambda A: np.array([complex(self.mu(A))])
+        ctx.point = lambda X, m, A: self.end(X[0])
+        self.ctx = ctx
+
+    def end(self, s):
+        X = np.array([s, s])
+        return {"X": X, "A": s, "mu": np.array([complex(self.mu(s))]), "unstable": int(abs(self.mu(s)) > 1.0)}
+
+    def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian):
+        self.trials += 1
+        Xm = X_lo + theta * (X_hi - X_lo)
+        return Xm, mode, float(Xm[0])
+
+    def locate(self, tol=1e-7):
+        a, b = self.end(0.0), self.end(1.0)
+        best, bracket = self.ctx._locate_crossing(a, b, a["X"], None, 0, tol)
+        return best["X"][0], bracket
+
+
+def test_a_multiplier_that_jumps_across_the_circle_is_a_border_collision():
+    """A crossing where the multiplier jumps (0.8 to 1.1 at s = 0.3137) stops once the bracket is ``JUMP_NARROWING``
+    of its first width, as a border collision, past the jump and within that width of it; a continuous crossing
+    (through the circle at s = 0.2, however it is scaled) is located to the tolerance and is no border collision."""
+    from blademodel.orbits.arclength import JUMP_NARROWING
+    jump = _SyntheticBranch(lambda s: 0.8 if s < 0.3137 else 1.1)
+    s, bracket = jump.locate()
+    assert bracket is not None and bracket[0] < 0.3137 <= bracket[1] and bracket[1] - bracket[0] <= JUMP_NARROWING
+    assert s == bracket[1] and jump.trials < 30
+    for steep in (1.0, 100.0):
+        smooth = _SyntheticBranch(lambda s, k=steep: 1.0 + 0.2 * np.tanh(k * (s - 0.2)))
+        s, bracket = smooth.locate()
+        assert bracket is None and abs(s - 0.2) <= 1e-7

@@ -57,7 +57,11 @@ class SpecialPoint:
         of events per orbit changes: a guard of the orbit touches zero), or
         ``"nonsmooth-fold"``: the branch turns back at a kink of the map (a grazing), its
         stability changing with no multiplier on the unit circle (one jumps across it);
-        located only to within the last step across the kink.
+        located only to within the last step across the kink; or ``"border-collision"``:
+        the stability changes at a kink of the map where the branch goes on, a multiplier
+        jumping across the unit circle (no multiplier within ``JUMP_GAP`` of it on either
+        side); located to within ``JUMP_NARROWING`` of the step across it, or at the
+        grazing found in that bracket (to ``locate_tol``), which is then its kink.
     param : float
         The field's value there (located to ``locate_tol`` of the range).
     state : ndarray
@@ -635,8 +639,9 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             found = [_special("nonsmooth-fold", pts[-1], len(pts) - 1)]
         else:
             found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
-        off_circle = any(_off_circle(q) for q in found)
-        if not jumped and h / 2 >= ds_min and off_circle:
+        # a border collision is off the circle by nature (located as such, not a correction on another arm)
+        off_circle = any(_off_circle(q) or q.kind == "border-collision" for q in found)
+        if not jumped and h / 2 >= ds_min and any(_off_circle(q) for q in found):
             # the stability changed, but no multiplier lies on the unit circle where the change is
             # located: the correction landed on another arm of the branch (measured on the bilinear
             # pair's period-2 branch, from an unstable arm to a stable one); a shorter step
@@ -659,7 +664,8 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             h = max(h, 4 * ds_min)   # past the kink: steps grow again from there
         ahead = False
         if off_circle and T_new[-1] * T[-1] < 0:
-            found = [replace(q, kind="nonsmooth-fold") if _off_circle(q) else q for q in found]
+            found = [replace(q, kind="nonsmooth-fold") if _off_circle(q) or q.kind == "border-collision" else q
+                     for q in found]
         jumped = False
         if new["regular"]:
             switched = False   # a turn further on may be reached from its unstable side too
@@ -773,6 +779,12 @@ MAX_HALVINGS = 4
 STALL = 5
 #: A trial of the grazing bisection is solved to this fraction of the bracket's width (scaled residual).
 TRIAL_ACCURACY = 1e-4
+#: A stability change is a border collision (a multiplier jumps across the unit circle at a kink of the map)
+#: once its bracket has shrunk to this fraction of its first width while the multiplier nearest the circle
+#: stays at least JUMP_GAP from it (in modulus) at both ends: a test function that is continuous there would
+#: have come that close long before.
+JUMP_NARROWING = 1e-3
+JUMP_GAP = 1e-2
 
 
 class _Context:
@@ -1018,10 +1030,13 @@ class _Context:
         :meth:`_locate_grazing`).
         """
         found = []
+        bracket = None
         if a["unstable"] != b["unstable"]:
-            best = self._locate_crossing(a, b, Xa, Ta, mode, locate_tol)
+            best, bracket = self._locate_crossing(a, b, Xa, Ta, mode, locate_tol)
             mu = best["mu"][np.argmin(np.abs(np.abs(best["mu"]) - 1.0))]
-            if abs(mu.imag) > 1e-6 * abs(mu):
+            if bracket is not None:
+                kind = "border-collision"
+            elif abs(mu.imag) > 1e-6 * abs(mu):
                 kind = "neimark-sacker"
             else:
                 kind = "period-doubling" if mu.real < 0 else "fold"
@@ -1030,8 +1045,11 @@ class _Context:
             # the largest multiplier of the point before: at the grazing the map is not differentiable, and
             # difference quotients there straddle the kink (measured on 4- to 12-blade rings: 2e4 to 2.4e5 between
             # points at about 0.62)
-            found.append(_special("grazing", self._locate_grazing(a, b, Xa, Ta, mode, locate_tol), index,
-                                  a["mu"][0]))
+            graze = _special("grazing", self._locate_grazing(a, b, Xa, Ta, mode, locate_tol), index, a["mu"][0])
+            if bracket is not None and min(bracket) <= graze.param <= max(bracket):
+                # the border collision's kink is this grazing, located to the tolerance: it is placed there
+                found[-1] = replace(found[-1], param=graze.param, state=graze.state, mode=graze.mode)
+            found.append(graze)
         return found
 
     def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian, tol=None, at_value=False, newton=True):
@@ -1074,6 +1092,15 @@ class _Context:
         it, so the bracket closes to ``locate_tol`` of arclength in a few corrected points
         where bisection took about twenty; which side a trial lies on is decided by its
         count of unstable multipliers.
+
+        Returns the point and, for a **border collision**, the field's values at the
+        bracket's ends (else None). A border collision is found where the bracket
+        shrank to ``JUMP_NARROWING`` of its first width with the test function at least
+        ``JUMP_GAP`` from zero at both ends, so a multiplier jumps across the circle at a
+        kink of the map (a grazing where the orbit's event sequence changes). There the
+        location stops: regula falsi would close such a bracket only linearly, with
+        trials ever nearer the kink, where corrections struggle (measured on the 24-blade
+        ring at 274.2262 rad/s: 0.875 on one side, 1.04 to 1.08 on the other, 31 trials).
         """
         def test(mu):
             return float(np.abs(mu[np.argmin(np.abs(np.abs(mu) - 1.0))]) - 1.0)
@@ -1081,11 +1108,17 @@ class _Context:
         X_lo, X_hi = Xa, b["X"]
         A_lo, A_hi = a["A"], b["A"]
         f_lo, f_hi = test(a["mu"]), test(b["mu"])
+        g_lo, g_hi = abs(f_lo), abs(f_hi)   # the test function's own values (Illinois scales f_lo, f_hi)
+        first = float(np.linalg.norm(X_hi - X_lo))
         best = b
         last = 0
+        jump = False
         for _ in range(100):
             width = float(np.linalg.norm(X_hi - X_lo))
             if width <= locate_tol:
+                break
+            if width <= JUMP_NARROWING * first and min(g_lo, g_hi) >= JUMP_GAP:
+                jump = True
                 break
             theta = 0.5
             if f_lo * f_hi < 0.0:
@@ -1098,17 +1131,18 @@ class _Context:
             mu = self.multipliers(Am)
             f = test(mu)
             if _unstable_count(mu) == a["unstable"]:
-                X_lo, A_lo, f_lo = Xm, Am, f
+                X_lo, A_lo, f_lo, g_lo = Xm, Am, f, abs(f)
                 if last < 0:
                     f_hi *= 0.5
                 last = -1
             else:
-                X_hi, A_hi, f_hi = Xm, Am, f
+                X_hi, A_hi, f_hi, g_hi = Xm, Am, f, abs(f)
                 best = (Xm, mm, Am)
                 if last > 0:
                     f_lo *= 0.5
                 last = 1
-        return self.point(*best) if isinstance(best, tuple) else best
+        bracket = (X_lo[-1] * self.span, X_hi[-1] * self.span) if jump else None
+        return (self.point(*best) if isinstance(best, tuple) else best), bracket
 
     def _locate_grazing(self, a, b, Xa, Ta, mode, locate_tol):
         """The first point past a change of the number of events per orbit from ``a`` to ``b``, by bisection.
@@ -1173,7 +1207,7 @@ def _special(kind: str, point: dict, index: int, multiplier=None) -> SpecialPoin
 
 def _off_circle(p: SpecialPoint) -> bool:
     """A fold, period doubling or Neimark-Sacker point whose critical multiplier is not on the unit circle."""
-    return p.kind != "grazing" and abs(abs(p.multiplier) - 1.0) > 0.05
+    return p.kind not in ("grazing", "border-collision") and abs(abs(p.multiplier) - 1.0) > 0.05
 
 
 def _between(X, X_lo, X_hi) -> bool:
