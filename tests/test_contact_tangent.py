@@ -166,3 +166,23 @@ def test_a_branch_does_not_depend_on_what_was_computed_before_it():
     alone = continuation(cfg, "omega", 285.0, 290.0, max_points=12, workers=1)
     for a in ("params", "states", "multipliers"):
         np.testing.assert_array_equal(getattr(after, a), getattr(alone, a), err_msg=a)
+
+
+def test_a_bounded_cache_moves_the_cost_and_never_the_result(monkeypatch):
+    """With the kept matrices bounded to a few kilobytes (most dropped and computed again), a branch is the one
+    computed with room for all of them, bit for bit, and the kept bytes stay within the bounds."""
+    from blademodel.numeric import contact_tangent
+    from blademodel.orbits import continuation
+    cfg = BladedDisk(blades=4, engine_order=1, friction="coulomb", mistuning_std=0.05, mistuning_seed=3)
+    contact_tangent._CACHES.clear()
+    roomy = continuation(cfg, "omega", 285.0, 290.0, max_points=12, workers=1)
+    contact_tangent._CACHES.clear()
+    monkeypatch.setattr(contact_tangent, "KEEP_BYTES", 16 * 1024)
+    tight = continuation(cfg, "omega", 285.0, 290.0, max_points=12, workers=1)
+    for a in ("params", "states", "multipliers"):
+        np.testing.assert_array_equal(getattr(tight, a), getattr(roomy, a), err_msg=a)
+    kept = [c for caches in contact_tangent._CACHES.values() for c in caches.values()
+            if isinstance(c, contact_tangent._Kept)]
+    assert kept and all(c.size <= c.budget or len(c) == 1 for c in kept)
+    assert any(len(c) > 0 for c in kept) and any(c.dropped > 0 for c in kept)
+    contact_tangent._CACHES.clear()

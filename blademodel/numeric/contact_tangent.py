@@ -74,12 +74,57 @@ def _blas_threads_for(n: int):
 #: what was computed before it.
 _CACHES: OrderedDict = OrderedDict()
 _KEEP = 4
+#: The most bytes the modes' matrices ``A`` of one model may hold; the blocks, guard gradients, clusters and
+#: projections get an eighth of it each. A long continuation of a large ring meets thousands of modes (4888
+#: on the 24-blade ring from 270 to 300 rad/s, 360 MB of ``A``; a 100-blade ring's ``A`` is 1.3 MB each).
+KEEP_BYTES = 1 << 29
+
+
+def _nbytes(value) -> int:
+    if isinstance(value, np.ndarray):
+        return value.nbytes
+    if isinstance(value, (list, tuple)):
+        return 64 + sum(_nbytes(v) for v in value)
+    return 64
+
+
+class _Kept:
+    """Values by key, the least recently used dropped once they hold more than ``budget`` bytes.
+
+    What is kept here is computed from the model's values alone, so a dropped value is
+    computed again bit for bit the same: the budget moves the cost, never a result.
+    """
+
+    def __init__(self, budget: int):
+        self.budget, self.size, self._d = int(budget), 0, OrderedDict()
+        self.dropped = 0
+
+    def get(self, key):
+        value = self._d.get(key)
+        if value is not None:
+            self._d.move_to_end(key)
+        return value
+
+    def __setitem__(self, key, value):
+        old = self._d.pop(key, None)
+        if old is not None:
+            self.size -= _nbytes(old)
+        self._d[key] = value
+        self.size += _nbytes(value)
+        while self.size > self.budget and len(self._d) > 1:
+            self.size -= _nbytes(self._d.popitem(last=False)[1])
+            self.dropped += 1
+
+    def __len__(self):
+        return len(self._d)
 
 
 def _caches(integrator) -> dict:
     """The kept matrices of ``integrator``'s model and values (its ``flow_digest``)."""
     key = integrator.flow_digest()
-    c = _CACHES.pop(key, None) or {"A": {}, "gy": {}, "blocks": {}, "clusters": {}, "checked": set(), "projections": {}}
+    c = _CACHES.pop(key, None) or {"A": _Kept(KEEP_BYTES), "gy": _Kept(KEEP_BYTES // 8),
+                                   "blocks": _Kept(KEEP_BYTES // 8), "clusters": _Kept(KEEP_BYTES // 8),
+                                   "checked": set(), "projections": _Kept(KEEP_BYTES // 8)}
     _CACHES[key] = c
     while len(_CACHES) > _KEEP:
         _CACHES.popitem(last=False)
@@ -133,7 +178,7 @@ class ContactTangent:
         self._probe = np.random.default_rng(0).uniform(-1.0, 1.0, self.n)
         self._factored = None   # the contact modes the stick problem in the work arrays is factored for
         self._blocks, self._cluster_sets, self._projections = caches["blocks"], caches["clusters"], caches["projections"]
-        self._R: dict = {}
+        self._R = _Kept(KEEP_BYTES // 8)   # the step matrices R(hA) of this integrator's step
         self._G = np.zeros_like(integrator.GS[0])
         self._rows = [self._contact_rows(j) for j in range(self.nc)]
         self._tableau = tuple(np.ascontiguousarray(x, dtype=float) for x in (method.A, method.b, method.c))
