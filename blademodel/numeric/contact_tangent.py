@@ -34,44 +34,17 @@ falls back to differences.
 
 from __future__ import annotations
 
-import contextlib
 from collections import OrderedDict
 
 import numpy as np
 
+from .blas_threads import blas_threads_for
 from .tangent import SensitivityError
-
-#: The BLAS thread pools (``threadpoolctl``), found at the first replay.
-_POOLS = None
-
-
-#: The most states for which the replay runs BLAS in one thread (:func:`_blas_threads_for`).
-ONE_THREAD_STATES = 128
-
-
-def _blas_threads_for(n: int):
-    """A context in which numpy's BLAS runs in one thread if the matrices are ``n <= ONE_THREAD_STATES`` square.
-
-    The replay multiplies matrices of the ring's size one after the other. At 96 states
-    (24 blades) OpenBLAS's two threads cost more than they gain (a product in 47 us in one
-    thread, 62 us in two; the 24-blade ring from 270 to 300 rad/s: 76 s and 96 s of CPU
-    with the replay in one thread, 90 s and 154 s in two, the same branch to the bit); at
-    192 (48 blades) they gain a little (352 us against 296 us, a warm Jacobian 0.60 s
-    against 0.46 s) for twice the CPU. Larger rings keep the threads.
-    """
-    global _POOLS
-    if n > ONE_THREAD_STATES:
-        return contextlib.nullcontext()
-    from threadpoolctl import ThreadpoolController
-    if _POOLS is None:
-        _POOLS = ThreadpoolController()
-    return _POOLS.limit(limits=1, user_api="blas")
-
 
 #: The modes' matrices and guard gradients of the last few models, by what they are computed from
 #: (:meth:`~blademodel.numeric.contact_kernel.ContactIntegrator.flow_digest`): a continuation in the
-#: excitation frequency reuses them from point to point, and a kept one is the one a fresh computation would give, bit for bit, so a branch does not depend on
-#: what was computed before it.
+#: excitation frequency reuses them from point to point, and a kept one is the one a fresh computation
+#: would give, bit for bit, so a branch does not depend on what was computed before it.
 _CACHES: OrderedDict = OrderedDict()
 _KEEP = 4
 #: The most bytes the modes' matrices ``A`` of one model may hold; the blocks, guard gradients, clusters and
@@ -443,7 +416,7 @@ class ContactTangent:
             At an event whose guard has no rate along the flow (grazing), or where the
             log and the record disagree.
         """
-        with _blas_threads_for(self.n):
+        with blas_threads_for(self.n):   # the replay's products are of the ring's size
             return self._monodromy(rec_t, rec_y, rec_cm, log, n_log)
 
     def _monodromy(self, rec_t, rec_y, rec_cm, log, n_log: int) -> np.ndarray:

@@ -40,6 +40,7 @@ from typing import Callable
 import numpy as np
 
 from .. import interrupts
+from ..numeric.blas_threads import blas_threads_for
 from ..analysis.spectrum import dft_bin
 from .field_path import AffineFieldPath
 from .period_map import FlowError, PeriodMap, _copy, _key, worker_count
@@ -381,9 +382,10 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         T = _tangent(A, X - np.append(resume.states[-2] / scale, resume.params[-2] / span))
     else:
         T = _tangent(A, np.append(np.zeros(n), direction))
-    return _run(ctx, [ctx.point(X, m, A)], X, T, m, A, (start, stop), ds=ds, ds_min=ds_min, ds_max=ds_max,
-                max_points=max_points, locate_tol=locate_tol, progress=progress, checkpoint=checkpoint,
-                checkpoint_every=checkpoint_every, before=resume)
+    with blas_threads_for(n):   # multipliers, corrections and predictions of the orbit's size
+        return _run(ctx, [ctx.point(X, m, A)], X, T, m, A, (start, stop), ds=ds, ds_min=ds_min, ds_max=ds_max,
+                    max_points=max_points, locate_tol=locate_tol, progress=progress, checkpoint=checkpoint,
+                    checkpoint_every=checkpoint_every, before=resume)
 
 
 def _check_resumable(branch: Branch, name: str, periods: int, start: float, stop: float) -> None:
