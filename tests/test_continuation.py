@@ -519,9 +519,9 @@ class _SyntheticBranch:
     """A straight branch ``X(s) = (s, s)``, ``s`` in ``[0, 1]``, whose one multiplier is ``mu(s)``: the location of a
     stability change by :meth:`_Context._locate_crossing` without integrating anything."""
 
-    def __init__(self, mu):
+    def __init__(self, mu, fails_within=(0.0, 0.0)):
         from blademodel.orbits.arclength import _Context
-        self.mu, self.trials = mu, 0
+        self.mu, self.trials, self.fails_within = mu, 0, fails_within
         ctx = _Context.__new__(_Context)
         ctx.span = 1.0
         ctx._corrected = self._corrected
@@ -536,6 +536,8 @@ class _SyntheticBranch:
     def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian):
         self.trials += 1
         Xm = X_lo + theta * (X_hi - X_lo)
+        if self.fails_within[0] < Xm[0] < self.fails_within[1]:   # a correction that fails beside a kink
+            return None, mode, None
         return Xm, mode, float(Xm[0])
 
     def locate(self, tol=1e-7):
@@ -547,7 +549,8 @@ class _SyntheticBranch:
 def test_a_multiplier_that_jumps_across_the_circle_is_a_border_collision():
     """A crossing where the multiplier jumps (0.8 to 1.1 at s = 0.3137) stops once the bracket is ``JUMP_NARROWING``
     of its first width, as a border collision, past the jump and within that width of it; a continuous crossing
-    (through the circle at s = 0.2, however it is scaled) is located to the tolerance and is no border collision."""
+    (through the circle at s = 0.2, however steep) is located to the tolerance and is no border collision; where
+    trials beside the jump fail, it is one if the bracket had shrunk to a tenth (not if the first trial failed)."""
     from blademodel.orbits.arclength import JUMP_NARROWING
     jump = _SyntheticBranch(lambda s: 0.8 if s < 0.3137 else 1.1)
     s, bracket = jump.locate()
@@ -557,3 +560,9 @@ def test_a_multiplier_that_jumps_across_the_circle_is_a_border_collision():
         smooth = _SyntheticBranch(lambda s, k=steep: 1.0 + 0.2 * np.tanh(k * (s - 0.2)))
         s, bracket = smooth.locate()
         assert bracket is None and abs(s - 0.2) <= 1e-7
+    # trials beside the kink fail: a jump once the bracket is a tenth of the step, not before
+    near = _SyntheticBranch(lambda s: 0.991 if s < 0.3137 else 1.16, fails_within=(0.3137 - 0.02, 0.3137 + 0.02))
+    s, bracket = near.locate()
+    assert bracket is not None and bracket[0] < 0.3137 <= bracket[1] and bracket[1] - bracket[0] <= 0.1
+    early = _SyntheticBranch(lambda s: 0.991 if s < 0.3137 else 1.16, fails_within=(0.1, 0.9))
+    assert early.locate()[1] is None

@@ -60,9 +60,10 @@ class SpecialPoint:
         stability changing with no multiplier on the unit circle (one jumps across it);
         located only to within the last step across the kink; or ``"border-collision"``:
         the stability changes at a kink of the map where the branch goes on, a multiplier
-        jumping across the unit circle (no multiplier within ``JUMP_GAP`` of it on either
-        side); located to within ``JUMP_NARROWING`` of the step across it, or at the
-        grazing found in that bracket (to ``locate_tol``), which is then its kink.
+        jumping across the unit circle (its modulus differs across a bracket a thousandth
+        of the step about as much as across the step; ``multiplier`` is that one, past the
+        kink); located to within that bracket (a tenth of the step where a trial beside the
+        kink failed), or at the grazing found in it (to ``locate_tol``), then its kink.
     param : float
         The field's value there (located to ``locate_tol`` of the range).
     state : ndarray
@@ -782,11 +783,13 @@ STALL = 5
 #: A trial of the grazing bisection is solved to this fraction of the bracket's width (scaled residual).
 TRIAL_ACCURACY = 1e-4
 #: A stability change is a border collision (a multiplier jumps across the unit circle at a kink of the map)
-#: once its bracket has shrunk to this fraction of its first width while the multiplier nearest the circle
-#: stays at least JUMP_GAP from it (in modulus) at both ends: a test function that is continuous there would
-#: have come that close long before.
+#: once its bracket has shrunk to JUMP_NARROWING of its first width (JUMP_NARROWING_FAILED where a trial
+#: inside it failed, as trials beside a kink do) while the crossing multiplier's modulus still differs
+#: between the ends by at least JUMP_KEPT of what it differed by at first: a modulus that is continuous
+#: there would have closed that gap with the bracket.
 JUMP_NARROWING = 1e-3
-JUMP_GAP = 1e-2
+JUMP_NARROWING_FAILED = 1e-1
+JUMP_KEPT = 0.5
 
 
 class _Context:
@@ -1037,7 +1040,8 @@ class _Context:
             best, bracket = self._locate_crossing(a, b, Xa, Ta, mode, locate_tol)
             mu = best["mu"][np.argmin(np.abs(np.abs(best["mu"]) - 1.0))]
             if bracket is not None:
-                kind = "border-collision"
+                kind = "border-collision"   # with the multiplier that jumped across the circle
+                mu = best["mu"][np.argsort(-np.abs(best["mu"]), kind="stable")[min(a["unstable"], b["unstable"])]]
             elif abs(mu.imag) > 1e-6 * abs(mu):
                 kind = "neimark-sacker"
             else:
@@ -1096,30 +1100,42 @@ class _Context:
         count of unstable multipliers.
 
         Returns the point and, for a **border collision**, the field's values at the
-        bracket's ends (else None). A border collision is found where the bracket
-        shrank to ``JUMP_NARROWING`` of its first width with the test function at least
-        ``JUMP_GAP`` from zero at both ends, so a multiplier jumps across the circle at a
-        kink of the map (a grazing where the orbit's event sequence changes). There the
-        location stops: regula falsi would close such a bracket only linearly, with
-        trials ever nearer the kink, where corrections struggle (measured on the 24-blade
-        ring at 274.2262 rad/s: 0.875 on one side, 1.04 to 1.08 on the other, 31 trials).
+        bracket's ends (else None). A border collision is found where the bracket shrank
+        to ``JUMP_NARROWING`` of its first width (``JUMP_NARROWING_FAILED`` if a trial
+        failed) while the modulus of the crossing multiplier (the one whose count changes)
+        still differs between its ends by ``JUMP_KEPT`` of its first difference: a
+        multiplier jumps across the circle at a kink of the map (a grazing where the
+        orbit's event sequence changes). There the location stops: regula falsi would
+        close such a bracket only linearly, with trials ever nearer the kink, where
+        corrections struggle (measured on the 24-blade ring at 274.2262 rad/s: 0.875 on one
+        side, 1.04 to 1.08 on the other, 31 trials; or 0.991 and 1.16 across a second kink
+        `1e-5` rad/s above the first, seven location sequences ended by failed trials).
         """
         def test(mu):
             return float(np.abs(mu[np.argmin(np.abs(np.abs(mu) - 1.0))]) - 1.0)
 
+        k = min(a["unstable"], b["unstable"])
+
+        def crossing(mu):   # the modulus of the multiplier whose count outside the circle changes
+            return float(np.sort(np.abs(mu))[::-1][k])
+
         X_lo, X_hi = Xa, b["X"]
         A_lo, A_hi = a["A"], b["A"]
         f_lo, f_hi = test(a["mu"]), test(b["mu"])
-        g_lo, g_hi = abs(f_lo), abs(f_hi)   # the test function's own values (Illinois scales f_lo, f_hi)
-        first = float(np.linalg.norm(X_hi - X_lo))
+        c_lo, c_hi = crossing(a["mu"]), crossing(b["mu"])
+        first, first_gap = float(np.linalg.norm(X_hi - X_lo)), abs(c_hi - c_lo)
         best = b
         last = 0
         jump = False
+
+        def jumped(width, narrowing):
+            return width <= narrowing * first and abs(c_hi - c_lo) >= JUMP_KEPT * first_gap > 0.0
+
         for _ in range(100):
             width = float(np.linalg.norm(X_hi - X_lo))
             if width <= locate_tol:
                 break
-            if width <= JUMP_NARROWING * first and min(g_lo, g_hi) >= JUMP_GAP:
+            if jumped(width, JUMP_NARROWING):
                 jump = True
                 break
             theta = 0.5
@@ -1129,16 +1145,17 @@ class _Context:
             theta = min(max(theta, margin), 1.0 - margin)
             Xm, mm, Am = self._corrected(X_lo, X_hi, theta, mode, A_lo if theta <= 0.5 else A_hi, True)
             if Xm is None:
+                jump = jumped(width, JUMP_NARROWING_FAILED)
                 break
             mu = self.multipliers(Am)
             f = test(mu)
             if _unstable_count(mu) == a["unstable"]:
-                X_lo, A_lo, f_lo, g_lo = Xm, Am, f, abs(f)
+                X_lo, A_lo, f_lo, c_lo = Xm, Am, f, crossing(mu)
                 if last < 0:
                     f_hi *= 0.5
                 last = -1
             else:
-                X_hi, A_hi, f_hi, g_hi = Xm, Am, f, abs(f)
+                X_hi, A_hi, f_hi, c_hi = Xm, Am, f, crossing(mu)
                 best = (Xm, mm, Am)
                 if last > 0:
                     f_lo *= 0.5
