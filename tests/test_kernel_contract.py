@@ -1,6 +1,7 @@
 """The kernel contract: named counters and statuses, the run buffer, a cache that cannot go stale."""
 
 import os
+import sys
 
 import numba
 import numpy as np
@@ -84,6 +85,10 @@ def test_internal_functions_are_only_linked_and_entry_points_internalize(tmp_pat
     assert code_libraries.SUPPORTED   # a checked release must have what the pipelines replace
     monkeypatch.setenv("BLADEMODEL_CACHE_DIR", str(tmp_path))   # compiled here, not loaded from a cache
     contact_kernel._MEMO.clear()
+    # nor taken from a module an earlier test of this process imported (its entry points loaded from that
+    # test's cache compile nothing they link); put back after the test
+    for name in [m for m in sys.modules if m.startswith("blademodel_generated_")]:
+        monkeypatch.delitem(sys.modules, name)
     integ = ContactIntegrator(BladedDisk(blades=3, friction="none").build(), check_stability=False)
     y = integ.initial_state()
     y[0] = 1e-3

@@ -642,9 +642,14 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             found = [_special("nonsmooth-fold", pts[-1], len(pts) - 1)]
         else:
             found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
-        # a border collision is off the circle by nature (located as such, not a correction on another arm)
         off_circle = any(_off_circle(q) or q.kind == "border-collision" for q in found)
-        if not jumped and h / 2 >= ds_min and any(_off_circle(q) for q in found):
+        retry = any(_off_circle(q) for q in found)
+        if not retry and any(q.kind == "border-collision" for q in found):
+            # a border collision is off the circle by nature: where the branch goes on through it (its new
+            # tangent, oriented away from the last point, keeps the field's direction) it is kept; where it
+            # turns back it is a nonsmooth fold, approached by shorter steps as before
+            retry = float(_tangent(A_new, X_new - X)[-1]) * float(T[-1]) < 0
+        if not jumped and h / 2 >= ds_min and retry:
             # the stability changed, but no multiplier lies on the unit circle where the change is
             # located: the correction landed on another arm of the branch (measured on the bilinear
             # pair's period-2 branch, from an unstable arm to a stable one); a shorter step
