@@ -40,8 +40,8 @@ from typing import Callable
 import numpy as np
 
 from .. import interrupts
-from ..numeric.blas_threads import blas_threads_for
 from ..analysis.spectrum import dft_bin
+from ..numeric.blas_threads import blas_threads_for
 from .field_path import AffineFieldPath
 from .period_map import FlowError, PeriodMap, _copy, _key, worker_count
 from .shooting import _n_coordinates, _orbit_samples, _same, _state_scale, find_periodic_orbit
@@ -1114,7 +1114,7 @@ class _Context:
         close such a bracket only linearly, with trials ever nearer the kink, where
         corrections struggle (measured on the 24-blade ring at 274.2262 rad/s: 0.875 on one
         side, 1.04 to 1.08 on the other, 31 trials; or 0.991 and 1.16 across a second kink
-        `1e-5` rad/s above the first, seven location sequences ended by failed trials).
+        1e-5 rad/s above the first, seven location sequences ended by failed trials).
         """
         def test(mu):
             return float(np.abs(mu[np.argmin(np.abs(np.abs(mu) - 1.0))]) - 1.0)
