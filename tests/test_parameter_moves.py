@@ -115,7 +115,8 @@ def test_a_ring_integrator_takes_parameter_values_as_with_parameters_does():
     as at construction; and a continuation of a ring in omega moves its parameters along the field's path."""
     from blademodel.config import BladedDisk
     from blademodel.orbits.arclength import _Family
-    cfg = BladedDisk(blades=4, engine_order=1, friction="bilinear", mistuning=[0, 0.03, -0.02, 0.01])
+    # the Coulomb ring of the test above: its kernel is compiled once for both
+    cfg = BladedDisk(blades=4, engine_order=1, friction="coulomb", mistuning=[0, 0.03, -0.02, 0.01])
     ig = make_integrator(cfg.build())
     model = cfg.model_copy(update={"omega": 283.0, "mu": 0.25}).build()
     a = ig.with_parameters(model)
