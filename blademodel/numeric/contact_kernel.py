@@ -317,6 +317,7 @@ class ContactIntegrator(Integrator):
         self.SC = np.zeros((contract.SC_ROWS + max(self.method.stages - 1, 0), self.n_state))
         self.GS = np.zeros((contract.GS_ROWS, max(self.nc, 1), self.kmeta["gmax"]))
         self._run_end = None
+        self._digest = None   # flow_digest of these tables, taken at first use
 
     def _check_step(self) -> None:
         if self._check_stability:
@@ -335,7 +336,13 @@ class ContactIntegrator(Integrator):
 
         Two integrators with the same digest have the same modes' matrices ``df/dy``
         (and so the same stable step): a continuation in the excitation frequency keeps it.
+        Taken once per set of tables (the step's check and the tangent's kept matrices both ask).
         """
+        if self._digest is None:
+            self._digest = self._flow_digest()
+        return self._digest
+
+    def _flow_digest(self) -> str:
         I, R = self.I, self.R.copy()
         R[int(I[contract.R_OM]):int(I[contract.R_GN])] = 0.0
         R[int(I[contract.R_TG]):] = 0.0
@@ -369,11 +376,8 @@ class ContactIntegrator(Integrator):
         StepTooLargeError
             If the step is unstable with the new parameters.
         """
-        from .integrator import StructureMismatch
-        p_raw = np.array(p_raw, dtype=float)
-        if p_raw.shape != (len(self.param_names),) or not np.all(np.isfinite(p_raw)):
-            raise ValueError(f"p_raw must hold {len(self.param_names)} finite values (one per parameter: "
-                             f"{', '.join(self.param_names)}), got {p_raw!r}")
+        from .integrator import StructureMismatch, checked_parameter_values
+        p_raw = checked_parameter_values(p_raw, self.param_names)
         new = copy.copy(self)
         if period is not None and not self._explicit_period:
             new.period = float(period)

@@ -168,6 +168,21 @@ def check_advance_arguments(integ: "Integrator", y, mode, start_period, end_peri
         _check_array("stats", stats, np.empty(1), N_STATS)
 
 
+def checked_parameter_values(p_raw, names) -> np.ndarray:
+    """``p_raw`` as floats, one finite value for each parameter of ``names`` (``with_parameter_values``).
+
+    Raises
+    ------
+    ValueError
+        Naming the parameters, if it is not.
+    """
+    p_raw = np.array(p_raw, dtype=float)
+    if p_raw.shape != (len(names),) or not np.all(np.isfinite(p_raw)):
+        raise ValueError(f"p_raw must hold {len(names)} finite values (one per parameter: "
+                         f"{', '.join(names)}), got {p_raw!r}")
+    return p_raw
+
+
 class StructureMismatch(ValueError):
     """A model given to :meth:`Integrator.with_parameters` differs in more than parameter values."""
 
@@ -334,10 +349,7 @@ class HybridIntegrator(Integrator):
         StepTooLargeError
             If the step is unstable with the new parameters.
         """
-        p_raw = np.array(p_raw, dtype=float)
-        if p_raw.shape != self.p_raw.shape or not np.all(np.isfinite(p_raw)):
-            raise ValueError(f"p_raw must hold {self.p_raw.size} finite values (one per parameter: "
-                             f"{', '.join(self.meta['params'])}), got {p_raw!r}")
+        p_raw = checked_parameter_values(p_raw, self.meta["params"])
         new = copy.copy(self)
         new.p_raw = p_raw
         new.p = self.module.derived(p_raw.tolist())   # Python floats: the generated formulas run twice as fast

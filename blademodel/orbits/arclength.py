@@ -1046,7 +1046,7 @@ class _Context:
             mu = best["mu"][np.argmin(np.abs(np.abs(best["mu"]) - 1.0))]
             if bracket is not None:
                 kind = "border-collision"   # with the multiplier that jumped across the circle
-                mu = best["mu"][np.argsort(-np.abs(best["mu"]), kind="stable")[min(a["unstable"], b["unstable"])]]
+                mu = _crossing_multiplier(best["mu"], min(a["unstable"], b["unstable"]))
             elif abs(mu.imag) > 1e-6 * abs(mu):
                 kind = "neimark-sacker"
             else:
@@ -1121,8 +1121,8 @@ class _Context:
 
         k = min(a["unstable"], b["unstable"])
 
-        def crossing(mu):   # the modulus of the multiplier whose count outside the circle changes
-            return float(np.sort(np.abs(mu))[::-1][k])
+        def crossing(mu):
+            return float(abs(_crossing_multiplier(mu, k)))
 
         X_lo, X_hi = Xa, b["X"]
         A_lo, A_hi = a["A"], b["A"]
@@ -1239,6 +1239,12 @@ def _between(X, X_lo, X_hi) -> bool:
     width = np.linalg.norm(X_hi - X_lo)
     d_lo, d_hi = np.linalg.norm(X - X_lo), np.linalg.norm(X - X_hi)
     return bool(min(d_lo, d_hi) > 1e-6 * width and max(d_lo, d_hi) < width)
+
+
+def _crossing_multiplier(mu, k: int) -> complex:
+    """The multiplier whose count outside the unit circle changes between ``k`` and ``k + 1``: the ``k + 1``-th
+    largest in modulus."""
+    return mu[np.argsort(-np.abs(mu), kind="stable")[k]]
 
 
 def _unstable_count(mu) -> int:
