@@ -24,8 +24,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser("continue", help="follow periodic orbits in a parameter (FRFs, bifurcations)",
                               description="Find a periodic orbit at --from, then follow it by pseudo-arclength "
                                           "continuation in the config field --param toward --to, around folds; "
-                                          "report each orbit's stability and the folds, period doublings and "
-                                          "Neimark-Sacker bifurcations found.")
+                                          "report each orbit's stability and the folds, period doublings, "
+                                          "Neimark-Sacker bifurcations, border collisions and grazing points "
+                                          "found.")
     add_model_arguments(p)
     p.add_argument("--param", required=True, metavar="NAME", help="config field, e.g. omega (an FRF) or gamma")
     p.add_argument("--from", dest="start", type=float, required=True, metavar="A", help="start value")
@@ -36,6 +37,10 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--max-points", type=int, default=400, metavar="K", help="points at most (default 400)")
     p.add_argument("--ds-max", type=float, default=0.05, help="largest arclength step (default 0.05)")
     p.add_argument("--tol", type=float, default=1e-10, help="scaled residual of each orbit (default 1e-10)")
+    p.add_argument("--grazing-tol", type=float, default=None, metavar="G",
+                   help="locate grazing points only to G of the range (default: as the bifurcations, 1e-7); "
+                        "inf reports each at the first point past it. Cheaper on mistuned rings, whose contacts "
+                        "graze one by one; the branch's points stay the same")
     add_stepping_arguments(p)
     p.add_argument("--switch", action="store_true",
                    help="also follow the period-doubled branch born at each period doubling found "
@@ -120,7 +125,11 @@ def run(args: argparse.Namespace) -> int:
         sweep_overlay(args.overlay, args.param, 0)   # the file's checks, before the continuation
     config, _ = config_and_model(args)
     run_settings = {k: getattr(args, k) for k in _RUN_OPTIONS}
-    shared = dict(max_points=args.max_points, ds_max=args.ds_max, tol=args.tol,
+    if args.grazing_tol is not None:   # (files written without it stay this command's own at the default)
+        if not args.grazing_tol > 0:
+            raise ValueError(f"--grazing-tol must be > 0 (or inf), got {args.grazing_tol}")
+        run_settings["grazing_tol"] = args.grazing_tol
+    shared = dict(max_points=args.max_points, ds_max=args.ds_max, tol=args.tol, grazing_tol=args.grazing_tol,
                   steps_per_period=args.steps_per_period, event_tol=args.event_tol, method=args.method,
                   jacobian=args.jacobian, workers=args.workers)
 

@@ -287,9 +287,9 @@ class _Family:
 def continuation(config, name: str, start: float, stop: float, *, periods: int = 1, guess=None, mode=None,
                  transient: int = 20, ds: float = 0.01, ds_min: float = 1e-5, ds_max: float = 0.05,
                  max_points: int = 400, tol: float = 1e-10, max_corrections: int = 8, rel_step: float = 1e-6,
-                 locate_tol: float = 1e-7, steps_per_period: int = 1000, event_tol: float = 1e-10,
-                 method: str = "rk4", kernel: str = "auto", jacobian: str = "auto", workers: int | None = None,
-                 progress: Callable[[int, float], None] | None = None,
+                 locate_tol: float = 1e-7, grazing_tol: float | None = None, steps_per_period: int = 1000,
+                 event_tol: float = 1e-10, method: str = "rk4", kernel: str = "auto", jacobian: str = "auto",
+                 workers: int | None = None, progress: Callable[[int, float], None] | None = None,
                  checkpoint: Callable[[Branch], None] | None = None, checkpoint_every: float = 30.0,
                  resume: Branch | None = None) -> Branch:
     """Follow the periodic orbits of ``config`` as its field ``name`` goes from ``start`` toward ``stop``.
@@ -319,6 +319,13 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         Difference step relative to each state's scale (and to the range, for the field).
     locate_tol : float
         Bifurcations are located to this fraction of the range.
+    grazing_tol : float, optional
+        Grazing points are located to this (as ``locate_tol``; None: ``locate_tol``).
+        Their bisection takes about ``log2(step / grazing_tol)`` trials of one or two
+        integrations each, which on a mistuned ring is most of the cost; a coarser
+        ``grazing_tol`` moves only where the grazing points are reported, not the branch
+        (its points are the same to the bit), and ``inf`` reports each at the first
+        point past it, with no trials (``docs/orbits.md``, *Continuation*).
     steps_per_period, event_tol, method, kernel
         The integrator's settings.
     jacobian : {"auto", "tangent", "differences", "forward"}
@@ -357,6 +364,7 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         If ``resume`` is not a branch of ``name`` with ``periods`` that lies in the range.
     """
     settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
+    _check_grazing_tol(grazing_tol)
     span = abs(stop - start)
     if not span > 0:
         raise ValueError(f"start and stop must differ, got {start!r} and {stop!r}")
@@ -373,7 +381,7 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
                                 rel_step=rel_step, integrator=P0.integrator, jacobian=jacobian, workers=workers)
     scale = first.scale
     n = scale.size
-    ctx = _Context(fam, scale, span, tol, rel_step, max_corrections)
+    ctx = _Context(fam, scale, span, tol, rel_step, max_corrections, grazing_tol)
 
     # scaled unknowns X = (y / scale, lambda / span)
     X = np.append(first.state / scale, at / span)
@@ -387,6 +395,12 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         return _run(ctx, [ctx.point(X, m, A)], X, T, m, A, (start, stop), ds=ds, ds_min=ds_min, ds_max=ds_max,
                     max_points=max_points, locate_tol=locate_tol, progress=progress, checkpoint=checkpoint,
                     checkpoint_every=checkpoint_every, before=resume)
+
+
+def _check_grazing_tol(grazing_tol) -> None:
+    """Raise ``ValueError`` unless ``grazing_tol`` is None or a number > 0 (``inf`` included)."""
+    if grazing_tol is not None and not float(grazing_tol) > 0.0:
+        raise ValueError(f"grazing_tol must be > 0 (or inf: no location), got {grazing_tol!r}")
 
 
 def _check_resumable(branch: Branch, name: str, periods: int, start: float, stop: float) -> None:
@@ -418,8 +432,9 @@ def _mode_row(mode) -> np.ndarray:
 def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, stop: float, *,
                           periods: int = 1, ds: float = 0.01, ds_min: float = 1e-5, ds_max: float = 0.05,
                           max_points: int = 400, tol: float = 1e-10, max_corrections: int = 8,
-                          rel_step: float = 1e-6, locate_tol: float = 1e-7, steps_per_period: int = 1000,
-                          event_tol: float = 1e-10, method: str = "rk4", kernel: str = "auto",
+                          rel_step: float = 1e-6, locate_tol: float = 1e-7, grazing_tol: float | None = None,
+                          steps_per_period: int = 1000, event_tol: float = 1e-10, method: str = "rk4",
+                          kernel: str = "auto",
                           jacobian: str = "auto", workers: int | None = None,
                           progress: Callable[[int, float], None] | None = None,
                           checkpoint: Callable[[Branch], None] | None = None,
@@ -447,7 +462,7 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
         The range of the field the new branch is followed in (it must contain the point).
     periods : int
         Period of the *old* branch; the new one has twice it.
-    ds, ds_min, ds_max, max_points, tol, max_corrections, rel_step, locate_tol : float
+    ds, ds_min, ds_max, max_points, tol, max_corrections, rel_step, locate_tol, grazing_tol : float
         As for :func:`continuation`; ``ds`` is also the switch's step along ``v``.
     steps_per_period, event_tol, method, kernel, jacobian, workers, progress, checkpoint, checkpoint_every
         As for :func:`continuation`.
@@ -472,6 +487,7 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
     lo, hi = min(start, stop), max(start, stop)
     if not lo <= point.param <= hi:
         raise ValueError(f"the period doubling at {name} = {point.param:g} lies outside [{lo:g}, {hi:g}]")
+    _check_grazing_tol(grazing_tol)
     settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
     fam = _Family(config, name, 2 * periods, settings, point.param, jacobian, bounds=(start, stop), workers=workers)
     span = hi - lo
@@ -490,7 +506,7 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
     k = int(np.argmin(np.abs(mu + 1.0)))
     v = np.real(V[:, k]) / scale
     v /= np.linalg.norm(v)
-    ctx = _Context(fam, scale, span, tol, rel_step, max_corrections)
+    ctx = _Context(fam, scale, span, tol, rel_step, max_corrections, grazing_tol)
     X0 = np.append(y / scale, point.param / span)
     A0 = ctx.jacobian(X0, mode)
     for sign, h in ((1.0, ds), (-1.0, ds), (1.0, 2 * ds), (-1.0, 2 * ds)):
@@ -800,9 +816,10 @@ JUMP_KEPT = 0.5
 class _Context:
     """Residuals, Jacobians, corrections and bifurcation tests in the scaled unknowns."""
 
-    def __init__(self, fam: _Family, scale, span, tol, rel_step, max_corrections):
+    def __init__(self, fam: _Family, scale, span, tol, rel_step, max_corrections, grazing_tol=None):
         self.fam, self.scale, self.span = fam, scale, span
         self.tol, self.rel_step, self.max_corrections = tol, rel_step, max_corrections
+        self.grazing_tol = grazing_tol   # grazing points' location tolerance (None: the bifurcations' locate_tol)
         self.n = scale.size
         self.iterations = 0
         self.events = -1   # events of the orbit of the last residual's run
@@ -1056,7 +1073,8 @@ class _Context:
             # the largest multiplier of the point before: at the grazing the map is not differentiable, and
             # difference quotients there straddle the kink (measured on 4- to 12-blade rings: 2e4 to 2.4e5 between
             # points at about 0.62)
-            graze = _special("grazing", self._locate_grazing(a, b, Xa, Ta, mode, locate_tol), index, a["mu"][0])
+            at = self._locate_grazing(a, b, Xa, Ta, mode, locate_tol if self.grazing_tol is None else self.grazing_tol)
+            graze = _special("grazing", at, index, a["mu"][0])
             if bracket is not None and min(bracket) <= graze.param <= max(bracket):
                 # the border collision's kink is this grazing, located to the tolerance: it is placed there
                 found[-1] = replace(found[-1], param=graze.param, state=graze.state, mode=graze.mode)
