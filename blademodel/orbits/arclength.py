@@ -42,6 +42,7 @@ import numpy as np
 from .. import interrupts
 from ..analysis.spectrum import dft_bin
 from ..numeric.blas_threads import blas_threads_for
+from .background import Locator, PendingPoint, resolve
 from .field_path import AffineFieldPath
 from .period_map import FlowError, PeriodMap, _copy, _key, worker_count
 from .shooting import _n_coordinates, _orbit_samples, _same, _state_scale, find_periodic_orbit
@@ -191,6 +192,7 @@ class _Family:
         self._cache: dict = {}
         self._dropped = (0, 0)   # integrations and replays of the maps no longer kept
         self._first = None
+        self.first_value = None   # the field's value the first integrator was built at
         self._bounds = (min(bounds), max(bounds)) if bounds is not None else None
         self._path: AffineFieldPath | None = None
         self._probed = False
@@ -259,6 +261,14 @@ class _Family:
         """The names of the integrator's states (once a period map exists)."""
         return list(self._first.meta["state"])
 
+    def twin(self) -> "_Family":
+        """A family of its own period maps (and integrators, and work arrays) that gives the same maps to the bit:
+        its first integrator is built at this one's first value, so that both move from it alike."""
+        twin = _Family(self.config, self.name, self.periods, self.settings, self.first_value, self.jacobian,
+                       bounds=self._bounds, workers=1)
+        twin.map_at(self.first_value)
+        return twin
+
     def work(self) -> tuple[int, int]:
         """The integrations and tangent replays of every period map made so far."""
         maps = self._cache.values()
@@ -280,6 +290,7 @@ class _Family:
             except StructureMismatch:
                 pass
         self._first = make_integrator(model, **self.settings)
+        self.first_value = float(value)
         self._probed = False
         return self._first
 
@@ -333,8 +344,10 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         ``"forward"`` halves the integrations of a ring's Jacobian (multipliers to about ``rel_step``).
     workers : int, optional
         Threads for the difference quotients where the map is differentiated by
-        differences (rings): ``None`` or ``-1`` every CPU, ``1`` none. The branch is the
-        same to the bit whatever the number.
+        differences (rings): ``None`` or ``-1`` every CPU, ``1`` none; with two or more,
+        grazing points are also located in a thread of their own beside the continuation
+        (:mod:`.background`). The branch and its special points are the same to the bit
+        whatever the number.
     progress : callable, optional
         ``progress(point, value)`` after each point.
     checkpoint : callable, optional
@@ -544,21 +557,33 @@ def _run(ctx, pts, X, T, m, A, bounds, *, progress, checkpoint, checkpoint_every
             last = time.monotonic()
 
     earlier = 0 if before is None else before.params.size - 1
+    # grazing points located on period maps of their own, beside the continuation where a second CPU is free
+    ctx.locator = Locator(ctx.twin, thread=ctx.fam.workers >= 2)
     try:
-        message = _follow(ctx, pts, special, X, T, m, A, bounds, progress=report, earlier=earlier, **follow)
-    except KeyboardInterrupt:
-        interrupts.acknowledge()
-        where = f"{ctx.fam.name} = {pts[-1]['param']:.6g}"
-        raise ContinuationInterrupted(f"interrupted at {where} after {earlier + len(pts)} points",
-                                      _assemble(ctx, pts, special, f"interrupted at {where}", before, False)) from None
-    return _assemble(ctx, pts, special, message, before, True)
+        try:
+            message = _follow(ctx, pts, special, X, T, m, A, bounds, progress=report, earlier=earlier, **follow)
+        except KeyboardInterrupt:
+            interrupts.acknowledge()
+            where = f"{ctx.fam.name} = {pts[-1]['param']:.6g}"
+            raise ContinuationInterrupted(f"interrupted at {where} after {earlier + len(pts)} points",
+                                          _assemble(ctx, pts, special, f"interrupted at {where}", before,
+                                                    False)) from None
+        return _assemble(ctx, pts, special, message, before, True)
+    finally:
+        if ctx.locator is not None:
+            ctx.locator.shutdown()
+            ctx.locator = None
 
 
 def _assemble(ctx, pts, special, message: str, before: Branch | None, complete: bool) -> Branch:
     """The branch of the points ``pts`` and ``special`` points, after those of ``before`` (whose last point is
-    ``pts[0]`` found again)."""
+    ``pts[0]`` found again). Waits for the special points still being located."""
     fam = ctx.fam
+    resolve(special)
     integrations, replays = fam.work()
+    if ctx.locator is not None and ctx.locator.context is not None:
+        twin = ctx.locator.context.fam.work()
+        integrations, replays = integrations + twin[0], replays + twin[1]
     b = Branch(field=fam.name, periods=fam.periods, params=np.array([p["param"] for p in pts]),
                states=np.array([p["state"] for p in pts]), multipliers=np.array([p["mu"] for p in pts]),
                stable=np.array([p["stable"] for p in pts], dtype=bool),
@@ -669,7 +694,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             # the stability changed, but no multiplier lies on the unit circle where the change is
             # located: the correction landed on another arm of the branch (measured on the bilinear
             # pair's period-2 branch, from an unstable arm to a stable one); a shorter step
-            h /= 2
+            h /= 2   # (a grazing found is not located: its location starts once the step is taken)
             continue
         if secant:   # the difference quotients there may straddle the kink: the secant is the tangent
             T_new = (X_new - X) / np.linalg.norm(X_new - X)
@@ -693,6 +718,9 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         jumped = False
         if new["regular"]:
             switched = False   # a turn further on may be reached from its unstable side too
+        for q in found:
+            if isinstance(q, PendingPoint):
+                q.start()
         special += found
         pts.append(new)
         # each state scaled by its excursion on the newest orbit: amplitudes that grow a
@@ -820,6 +848,7 @@ class _Context:
         self.fam, self.scale, self.span = fam, scale, span
         self.tol, self.rel_step, self.max_corrections = tol, rel_step, max_corrections
         self.grazing_tol = grazing_tol   # grazing points' location tolerance (None: the bifurcations' locate_tol)
+        self.locator: Locator | None = None   # where grazing points are located (on period maps of its own)
         self.n = scale.size
         self.iterations = 0
         self.events = -1   # events of the orbit of the last residual's run
@@ -855,6 +884,11 @@ class _Context:
         except (FlowError, ValueError) as e:
             self.why = f"the Jacobian at the corrected point: {e}"
             return None
+
+    def twin(self) -> "_Context":
+        """A context on period maps of its own (:meth:`_Family.twin`): for work in another thread."""
+        return _Context(self.fam.twin(), self.scale.copy(), self.span, self.tol, self.rel_step, self.max_corrections,
+                        self.grazing_tol)
 
     def rescale(self, scale, X, T, A):
         """``X``, the tangent ``T`` and the Jacobian ``A`` in the state scale ``scale`` (was ``self.scale``)."""
@@ -1073,12 +1107,19 @@ class _Context:
             # the largest multiplier of the point before: at the grazing the map is not differentiable, and
             # difference quotients there straddle the kink (measured on 4- to 12-blade rings: 2e4 to 2.4e5 between
             # points at about 0.62)
-            at = self._locate_grazing(a, b, Xa, Ta, mode, locate_tol if self.grazing_tol is None else self.grazing_tol)
-            graze = _special("grazing", at, index, a["mu"][0])
-            if bracket is not None and min(bracket) <= graze.param <= max(bracket):
-                # the border collision's kink is this grazing, located to the tolerance: it is placed there
-                found[-1] = replace(found[-1], param=graze.param, state=graze.state, mode=graze.mode)
-            found.append(graze)
+            tol = locate_tol if self.grazing_tol is None else self.grazing_tol
+            multiplier = a["mu"][0]
+
+            def finish(at):
+                return _special("grazing", at, index, multiplier)
+            # located later, elsewhere (.background): on what the step has now (the points' dicts are
+            # rescaled later, their arrays never changed in place); a border collision whose bracket holds
+            # the grazing is placed there (background.resolve): that is its kink
+            if self.locator is None:
+                self.locator = Locator(self.twin, thread=False)
+            args = (self.scale.copy(), dict(a), dict(b), Xa.copy(), Ta, _copy(mode), tol)
+            found.append(PendingPoint(lambda ctx: _locate_grazing_in(ctx, *args), self.locator, finish, index,
+                                      bracket))
         return found
 
     def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian, tol=None, at_value=False, newton=True):
@@ -1238,6 +1279,12 @@ class _Context:
                 # multiplier of the point before (detect)
                 return {"param": Xb[-1] * self.span, "state": Xb[:-1] * self.scale, "mode": _copy(mb)}
         return b
+
+
+def _locate_grazing_in(ctx: _Context, scale, a, b, Xa, Ta, mode, tol):
+    """:meth:`_Context._locate_grazing` in ``ctx`` (another thread's), in the scale of the step that found it."""
+    ctx.scale = scale
+    return ctx._locate_grazing(a, b, Xa, Ta, mode, tol)
 
 
 def _special(kind: str, point: dict, index: int, multiplier=None) -> SpecialPoint:

@@ -1,0 +1,81 @@
+"""Grazing points located in a second thread: the same branch and special points as in one, to the bit."""
+
+import threading
+import time
+import numpy as np
+
+from blademodel.orbits import continuation
+from blademodel.orbits.arclength import SpecialPoint
+from blademodel.orbits.background import Locator, PendingPoint, resolve
+from blademodel.zheng2022 import BladePair
+
+
+def _same(b1, b2):
+    for name in ("params", "states", "multipliers", "events", "harmonics"):
+        np.testing.assert_array_equal(getattr(b1, name), getattr(b2, name))
+    assert [(p.kind, p.index) for p in b1.special] == [(p.kind, p.index) for p in b2.special]
+    for p, q in zip(b1.special, b2.special):
+        assert p.param == q.param and p.multiplier == q.multiplier
+        np.testing.assert_array_equal(p.state, q.state)
+
+
+def test_a_branch_is_the_same_with_its_grazing_points_located_in_a_second_thread():
+    """The Coulomb pair from 415 to 425 rad/s: grazing points, a nonsmooth fold where the branch turns at a
+    grazing, and a fold; located in the continuation's thread (``workers=1``) and in a thread of their own on
+    period maps of their own (``workers=2``). The second thread's integrations are counted too."""
+    cfg = BladePair(friction="coulomb")
+    one, two = (continuation(cfg, "omega", 415.0, 425.0, workers=w) for w in (1, 2))
+    assert {p.kind for p in one.special} >= {"grazing", "nonsmooth-fold", "fold"}
+    _same(one, two)
+    assert two.integrations == one.integrations   # the second thread's work is counted, and is the same
+
+
+def _point(kind, param, index):
+    return SpecialPoint(kind=kind, param=param, state=np.array([param]), multiplier=1.5, index=index)
+
+
+def test_resolve_waits_and_places_a_border_collision_at_the_grazing_in_its_bracket():
+    """A grazing located in the worker thread (which finishes after ``resolve`` starts waiting) replaces its
+    placeholder; the border collision (or the nonsmooth fold it became) of the same step is moved onto it where
+    it lies in that collision's bracket, and nothing else moves."""
+    locator = Locator(lambda: "context")
+    gate = threading.Event()
+
+    def slow(context):
+        gate.wait(5.0)
+        assert context == "context" and threading.current_thread() is not threading.main_thread()
+        return {"param": 1.01, "state": np.array([1.01]), "mode": None}
+
+    def finish(at):
+        return SpecialPoint(kind="grazing", param=at["param"], state=at["state"], multiplier=0.5, index=3)
+
+    pending = PendingPoint(slow, locator, finish, 3, bracket=(1.0, 1.03))
+    pending.start()
+    special = [_point("border-collision", 1.02, 3), _point("nonsmooth-fold", 2.0, 7), pending, _point("fold", 5.0, 3)]
+    threading.Timer(0.2, gate.set).start()
+    t0 = time.monotonic()
+    resolve(special)
+    assert time.monotonic() - t0 >= 0.15   # it waited for the location
+    locator.shutdown()
+    assert [(q.kind, q.param) for q in special] == [("border-collision", 1.01), ("nonsmooth-fold", 2.0),
+                                                     ("grazing", 1.01), ("fold", 5.0)]
+
+
+def test_without_a_thread_a_location_runs_once_where_it_is_first_needed_and_only_if_started_or_resolved():
+    """The continuation's thread: nothing runs at ``start``; ``resolve`` runs it, once; a point outside the
+    border collision's bracket leaves the collision where it is."""
+    runs = []
+
+    def task(context):
+        runs.append(context)
+        return {"param": 1.2, "state": np.array([1.2]), "mode": None}
+
+    locator = Locator(lambda: "own maps", thread=False)
+    pending = PendingPoint(task, locator, lambda at: _point("grazing", at["param"], 3), 3, bracket=(1.0, 1.03))
+    pending.start()
+    assert runs == []
+    special = [_point("nonsmooth-fold", 1.02, 3), pending]
+    resolve(special)
+    resolve(special)
+    assert runs == ["own maps"]
+    assert [(q.kind, q.param) for q in special] == [("nonsmooth-fold", 1.02), ("grazing", 1.2)]
