@@ -61,9 +61,9 @@ def test_resolve_waits_and_places_a_border_collision_at_the_grazing_in_its_brack
                                                      ("grazing", 1.01), ("fold", 5.0)]
 
 
-def test_without_a_thread_a_location_runs_once_where_it_is_first_needed_and_only_if_started_or_resolved():
-    """The continuation's thread: nothing runs at ``start``; ``resolve`` runs it, once; a point outside the
-    border collision's bracket leaves the collision where it is."""
+def test_without_a_thread_a_location_runs_when_its_step_is_taken_and_once():
+    """The continuation's thread: ``start`` runs it, once; a point outside the border collision's bracket leaves the
+    collision where it is."""
     runs = []
 
     def task(context):
@@ -72,10 +72,30 @@ def test_without_a_thread_a_location_runs_once_where_it_is_first_needed_and_only
 
     locator = Locator(lambda: "own maps", thread=False)
     pending = PendingPoint(task, locator, lambda at: _point("grazing", at["param"], 3), 3, bracket=(1.0, 1.03))
-    pending.start()
     assert runs == []
+    pending.start()
+    assert runs == ["own maps"] and pending.done()
     special = [_point("nonsmooth-fold", 1.02, 3), pending]
     resolve(special)
     resolve(special)
     assert runs == ["own maps"]
     assert [(q.kind, q.param) for q in special] == [("nonsmooth-fold", 1.02), ("grazing", 1.2)]
+
+
+def test_a_location_cut_short_by_ctrl_c_leaves_its_grazing_point_at_the_first_point_past_it():
+    """Ctrl-C inside a location run in the continuation's thread reaches the continuation (which then stops), and
+    the branch it keeps has that grazing point at the point past it, not lost."""
+    def interrupted(context):
+        raise KeyboardInterrupt
+
+    pending = PendingPoint(interrupted, Locator(lambda: None, thread=False), lambda at: _point("grazing", at["param"], 3),
+                           3, unlocated={"param": 1.5})
+    try:
+        pending.start()
+    except KeyboardInterrupt:
+        pass
+    else:
+        raise AssertionError("the Ctrl-C was swallowed")
+    special = [pending]
+    resolve(special)
+    assert [(q.kind, q.param) for q in special] == [("grazing", 1.5)]

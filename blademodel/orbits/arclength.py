@@ -577,7 +577,7 @@ def _run(ctx, pts, X, T, m, A, bounds, *, progress, checkpoint, checkpoint_every
 
 def _assemble(ctx, pts, special, message: str, before: Branch | None, complete: bool) -> Branch:
     """The branch of the points ``pts`` and ``special`` points, after those of ``before`` (whose last point is
-    ``pts[0]`` found again). Waits for the special points still being located."""
+    ``pts[0]`` found again), once the special points still being located have their places (in ``special``)."""
     fam = ctx.fam
     resolve(special)
     integrations, replays = fam.work()
@@ -1119,7 +1119,7 @@ class _Context:
                 self.locator = Locator(self.twin, thread=False)
             args = (self.scale.copy(), dict(a), dict(b), Xa.copy(), Ta, _copy(mode), tol)
             found.append(PendingPoint(lambda ctx: _locate_grazing_in(ctx, *args), self.locator, finish, index,
-                                      bracket))
+                                      bracket, unlocated=args[2]))
         return found
 
     def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian, tol=None, at_value=False, newton=True):
@@ -1282,9 +1282,14 @@ class _Context:
 
 
 def _locate_grazing_in(ctx: _Context, scale, a, b, Xa, Ta, mode, tol):
-    """:meth:`_Context._locate_grazing` in ``ctx`` (another thread's), in the scale of the step that found it."""
+    """:meth:`_Context._locate_grazing` in ``ctx`` (the locator's), in the scale of the step that found it; ``b``
+    (the first point past it) where an integration of the location fails: a grazing point's place is not worth
+    the branch."""
     ctx.scale = scale
-    return ctx._locate_grazing(a, b, Xa, Ta, mode, tol)
+    try:
+        return ctx._locate_grazing(a, b, Xa, Ta, mode, tol)
+    except (FlowError, np.linalg.LinAlgError, ValueError):
+        return b
 
 
 def _special(kind: str, point: dict, index: int, multiplier=None) -> SpecialPoint:

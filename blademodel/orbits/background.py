@@ -4,7 +4,7 @@ Locating a grazing point (bisection on the number of events per orbit) decides n
 the continuation goes on with: the branch's points are the same whether and however
 finely grazing points are located (``tests/test_grazing_tolerance.py``). So the location
 runs on period maps of its own (a period map keeps its last run and its integrator's
-work arrays, which two threads must not share, and bisecting on the continuation's maps
+work arrays, which two threads must not share; and bisecting on the continuation's maps
 pushed out of its few kept maps those it needed again), and where a second CPU is free,
 in a thread of its own while the continuation steps on. The kernels release the GIL while
 they integrate, which is most of a location. The branch's list of special points holds a
@@ -18,18 +18,6 @@ from dataclasses import replace
 from typing import Callable
 
 
-class _Later:
-    """A task run where its result is first asked for (the part of a :class:`Future` that is used here)."""
-
-    def __init__(self, run: Callable):
-        self._run, self._done, self._value = run, False, None
-
-    def result(self):
-        if not self._done:
-            self._value, self._done = self._run(), True
-        return self._value
-
-
 class Locator:
     """Where special points are located: a context of their own, made on the first task, in a worker thread or
     in the caller's.
@@ -39,8 +27,7 @@ class Locator:
     make_context : callable
         ``make_context()``: the context (its own period maps) the tasks run in.
     thread : bool
-        Run each task in a worker thread from :meth:`submit` on (else in the caller's
-        thread, where its result is first asked for).
+        Run the tasks in a worker thread (else at once, in :meth:`submit`).
     """
 
     def __init__(self, make_context: Callable, thread: bool = True):
@@ -48,11 +35,18 @@ class Locator:
         self.context = None
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="blademodel-grazing") if thread else None
 
-    def submit(self, task: Callable):
-        """``task(context)``: a :class:`Future`, or (without a thread) a result computed when asked for."""
+    def submit(self, task: Callable) -> Future:
+        """``task(context)``, in the worker thread if there is one; else now (a Ctrl-C in it is raised again)."""
         if self._pool is not None:
             return self._pool.submit(self._run, task)
-        return _Later(lambda: self._run(task))
+        f: Future = Future()
+        try:
+            f.set_result(self._run(task))
+        except BaseException as e:
+            f.set_exception(e)
+            if not isinstance(e, Exception):
+                raise
+        return f
 
     def _run(self, task):
         if self.context is None:
@@ -60,9 +54,9 @@ class Locator:
         return task(self.context)
 
     def shutdown(self) -> None:
-        """Stop the worker once its tasks are done (a task not yet started is dropped)."""
+        """Drop the tasks not yet started; one running finishes in the worker, which then stops (not waited for)."""
         if self._pool is not None:
-            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool.shutdown(wait=False, cancel_futures=True)
 
 
 class PendingPoint:
@@ -80,35 +74,52 @@ class PendingPoint:
     bracket : tuple of float, optional
         The field's values across a border collision found in the same step: where the
         located point lies between them, the border collision is placed there.
+    unlocated : dict, optional
+        What ``finish`` takes where the location was cut short by Ctrl-C: the first
+        branch point past the grazing.
     """
 
     kind = "grazing"
 
-    def __init__(self, task: Callable, locator: Locator, finish: Callable, index: int, bracket: tuple | None = None):
+    def __init__(self, task: Callable, locator: Locator, finish: Callable, index: int, bracket: tuple | None = None,
+                 unlocated: dict | None = None):
         self.task, self.locator, self.finish, self.index, self.bracket = task, locator, finish, index, bracket
-        self.future: Future | _Later | None = None
+        self.unlocated = unlocated
+        self.future: Future | None = None
 
     def start(self) -> None:
-        """Begin (once the step that found it is taken): in the locator's thread if it has one."""
+        """Begin (once the step that found it is taken): in the locator's thread, or now."""
         if self.future is None:
             self.future = self.locator.submit(self.task)
 
-    def result(self):
-        """The special point, waiting for (or making) the location."""
+    def done(self) -> bool:
+        return self.future is not None and self.future.done()
+
+    def located(self):
+        """The located point, waiting for the location (or making it)."""
         self.start()
-        return self.finish(self.future.result())
+        return self.future.result()
 
 
 def resolve(special: list) -> None:
-    """Replace every :class:`PendingPoint` in ``special`` by its special point, in place.
+    """Replace every :class:`PendingPoint` in ``special`` by its special point, in place, waiting for each.
 
     A border collision (or the nonsmooth fold it became) of the same step whose bracket
-    holds the located point is placed at it: the kink of the map is that grazing.
+    holds the located point is placed at it: the kink of the map is that grazing. A
+    location that a Ctrl-C cut short (or one pressed while waiting) leaves its grazing
+    point at the first branch point past it, and the rest are not waited for.
     """
+    hurry = False
     for i, q in enumerate(special):
         if not isinstance(q, PendingPoint):
             continue
-        point = q.result()
+        located = None
+        if not hurry or q.done():
+            try:
+                located = q.located()
+            except KeyboardInterrupt:
+                hurry = True
+        point = q.finish(q.unlocated if located is None else located)
         special[i] = point
         if q.bracket is None or not min(q.bracket) <= point.param <= max(q.bracket):
             continue
