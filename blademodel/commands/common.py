@@ -35,8 +35,9 @@ def add_jacobian_arguments(parser: argparse.ArgumentParser) -> None:
                              "differences where it fails), tangent, differences (central), forward (half the "
                              "integrations of central differences, multipliers to about 1e-6)")
     parser.add_argument("--workers", type=int, default=None, metavar="N",
-                        help="threads for Jacobians by differences (default: all cores; the result is the same "
-                             "whatever N)")
+                        help="threads for Jacobians by differences, and (continue, N >= 2) a thread that locates "
+                             "grazing points beside the continuation (default: all cores; the result is the same "
+                             "whatever N; give 1 where several runs share the machine)")
 
 
 def check_at_least_one(args: argparse.Namespace, names) -> None:
