@@ -181,7 +181,7 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
                 code = first_near_crossing(cm, I, WI, Gs, G1, t - t_sub, tol_t)  # noqa: F821
                 is_near = code >= 0
         settle_suspects(cm, I, WI, WF, G1)  # noqa: F821
-        if not settle_event(t, y, cm, I, R, WI, WF, counters, max_pivots, log_t, log_c, log_g,  # noqa: F821
+        if not settle_event(t, y, cm, I, R, WI, WF, Gs, counters, max_pivots, log_t, log_c, log_g,  # noqa: F821
                             log_from, log_to, recording):
             return STATUS_FRICTION_UNRESOLVED, t
         g0_valid = False
