@@ -102,3 +102,22 @@ def test_a_location_cut_short_by_ctrl_c_leaves_its_grazing_point_at_the_first_po
     special = [pending]
     resolve(special)
     assert [(q.kind, q.param) for q in special] == [("grazing", 1.5)]
+
+
+def test_a_location_whose_integration_fails_leaves_its_grazing_point_at_the_first_point_past_it(monkeypatch):
+    """A grazing point's place is not worth the branch: where its location's integration fails, the branch goes on
+    and reports it at the branch point after it (here every location fails), the branch's points unchanged."""
+    from blademodel.orbits import arclength
+    from blademodel.orbits.period_map import FlowError
+
+    cfg = BladePair(friction="coulomb")
+    fine = continuation(cfg, "omega", 312.3, 313.4, workers=1)
+
+    def failing(self, *args):
+        raise FlowError("the integration stopped")
+    monkeypatch.setattr(arclength._Context, "_locate_grazing", failing)
+    failed = continuation(cfg, "omega", 312.3, 313.4, workers=1)
+    np.testing.assert_array_equal(failed.params, fine.params)
+    grazing = failed.points("grazing")
+    assert len(grazing) == len(fine.points("grazing")) >= 3
+    assert all(p.param == failed.params[p.index + 1] for p in grazing)

@@ -158,9 +158,8 @@ def settle_event(t, y, cm, I, R, WI, WF, G, counters, max_pivots, log_t, log_c, 
     ac = wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
     cm0, before, fired = wvec(WI, nc, WC_CM0), wvec(WI, nc, WC_BEFORE), wvec(WI, nc, WC_FIRED)  # noqa: F821
     ok = True
-    solved = rigid_problem(cm, I, WI)
     moved = False   # a contact the friction problem alone moved (its ``before`` then -1)
-    if solved:
+    if rigid_problem(cm, I, WI):
         for jj in range(nca):
             j = ac[jj] & NONNEG
             before[j] = cm[j]

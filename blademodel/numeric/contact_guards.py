@@ -153,9 +153,11 @@ def mark_near(j, cm, I, WI, WF, G):
     ``|f| > mu N``). A guard found on the side its mode forbids is therefore read, until
     the contact's next transition, minus that value (``guard_offsets``): it starts on
     the boundary, fires as soon as it falls further and stays quiet while it returns.
-    Only such contacts: a guard that a regular transition leaves a rounding error on its
-    wrong side (a slip ending exactly at the friction limit while the contact unloads)
-    keeps its value, or two modes could chatter at one instant.
+    Only such contacts, and those the friction problem alone moves (a stuck contact
+    released into a slip at a velocity a rounding error past zero: ``settle_event``): a
+    guard that a regular transition leaves a rounding error on its wrong side (a slip
+    ending exactly at the friction limit while the contact unloads) keeps its value, or
+    two modes could chatter at one instant.
     """
     nc = I[H_NC]
     near, goff = wvec(WI, nc, WC_NEAR), vec(WF, I, F_GOFF, nc * GMAX)  # noqa: F821

@@ -570,9 +570,8 @@ def _run(ctx, pts, X, T, m, A, bounds, *, progress, checkpoint, checkpoint_every
                                                     False)) from None
         return _assemble(ctx, pts, special, message, before, True)
     finally:
-        if ctx.locator is not None:
-            ctx.locator.shutdown()
-            ctx.locator = None
+        ctx.locator.shutdown()
+        ctx.locator = None
 
 
 def _assemble(ctx, pts, special, message: str, before: Branch | None, complete: bool) -> Branch:
@@ -683,7 +682,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             found = [_special("nonsmooth-fold", pts[-1], len(pts) - 1)]
         else:
             found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
-        off_circle = any(_off_circle(q) or q.kind == "border-collision" for q in found)
+        off_circle = any(_at_kink(q) for q in found)
         retry = any(_off_circle(q) for q in found)
         if not retry and any(q.kind == "border-collision" for q in found):
             # a border collision is off the circle by nature: where the branch goes on through it (its new
@@ -713,8 +712,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             h = max(h, 4 * ds_min)   # past the kink: steps grow again from there
         ahead = False
         if off_circle and T_new[-1] * T[-1] < 0:
-            found = [replace(q, kind="nonsmooth-fold") if _off_circle(q) or q.kind == "border-collision" else q
-                     for q in found]
+            found = [replace(q, kind="nonsmooth-fold") if _at_kink(q) else q for q in found]
         jumped = False
         if new["regular"]:
             switched = False   # a turn further on may be reached from its unstable side too
@@ -848,7 +846,7 @@ class _Context:
         self.fam, self.scale, self.span = fam, scale, span
         self.tol, self.rel_step, self.max_corrections = tol, rel_step, max_corrections
         self.grazing_tol = grazing_tol   # grazing points' location tolerance (None: the bifurcations' locate_tol)
-        self.locator: Locator | None = None   # where grazing points are located (on period maps of its own)
+        self.locator: Locator | None = None   # where grazing points are located (set by _run for its branch)
         self.n = scale.size
         self.iterations = 0
         self.events = -1   # events of the orbit of the last residual's run
@@ -1115,8 +1113,6 @@ class _Context:
             # located later, elsewhere (.background): on what the step has now (the points' dicts are
             # rescaled later, their arrays never changed in place); a border collision whose bracket holds
             # the grazing is placed there (background.resolve): that is its kink
-            if self.locator is None:
-                self.locator = Locator(self.twin, thread=False)
             args = (self.scale.copy(), dict(a), dict(b), Xa.copy(), Ta, _copy(mode), tol)
             found.append(PendingPoint(lambda ctx: _locate_grazing_in(ctx, *args), self.locator, finish, index,
                                       bracket, unlocated=args[2]))
@@ -1302,6 +1298,12 @@ def _special(kind: str, point: dict, index: int, multiplier=None) -> SpecialPoin
 def _off_circle(p: SpecialPoint) -> bool:
     """A fold, period doubling or Neimark-Sacker point whose critical multiplier is not on the unit circle."""
     return p.kind not in ("grazing", "border-collision") and abs(abs(p.multiplier) - 1.0) > 0.05
+
+
+def _at_kink(p) -> bool:
+    """A change of stability with no multiplier on the unit circle: off it (:func:`_off_circle`), or a border
+    collision (a multiplier jumping across it)."""
+    return _off_circle(p) or p.kind == "border-collision"
 
 
 def _between(X, X_lo, X_hi) -> bool:
