@@ -39,6 +39,7 @@ from collections import OrderedDict
 import numpy as np
 
 from .blas_threads import blas_threads_for
+from .contact_flow_pattern import flow_pattern, grouped_flow_matrix
 from .tangent import SensitivityError
 
 #: The modes' matrices and guard gradients of the last few models, by what they are computed from
@@ -56,6 +57,8 @@ KEEP_BYTES = 1 << 29
 def _nbytes(value) -> int:
     if isinstance(value, np.ndarray):
         return value.nbytes
+    if hasattr(value, "indptr"):   # a sparse matrix (a mode's A)
+        return value.data.nbytes + value.indices.nbytes + value.indptr.nbytes
     if isinstance(value, (list, tuple)):
         return 64 + sum(_nbytes(v) for v in value)
     return 64
@@ -97,7 +100,8 @@ def _caches(integrator) -> dict:
     key = integrator.flow_digest()
     c = _CACHES.pop(key, None) or {"A": _Kept(KEEP_BYTES), "gy": _Kept(KEEP_BYTES // 8),
                                    "blocks": _Kept(KEEP_BYTES // 8), "clusters": _Kept(KEEP_BYTES // 8),
-                                   "checked": set(), "projections": _Kept(KEEP_BYTES // 8)}
+                                   "checked": set(), "projections": _Kept(KEEP_BYTES // 8), "pattern": [],
+                                   "ungrouped": set()}
     _CACHES[key] = c
     while len(_CACHES) > _KEEP:
         _CACHES.popitem(last=False)
@@ -116,6 +120,8 @@ def stability_matrix(hA: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
     """
     m = hA.shape[0]
     out = coefficients[-1] * hA   # Horner, its first product (hA times a multiple of I) written out
+    if hasattr(out, "toarray"):   # a sparse hA: the products hA @ out are sparse times dense
+        out = out.toarray()
     out.flat[::m + 1] += coefficients[-2]
     for c in coefficients[-3::-1]:
         out = hA @ out
@@ -147,6 +153,13 @@ class ContactTangent:
         self._poly = method.amplification_coefficients()
         caches = _caches(integrator)
         self._A, self._gy = caches["A"], caches["gy"]
+        if not caches["pattern"]:
+            caches["pattern"].append(flow_pattern(self.tables, self.n, [int(self.mod.NSTATES[int(K)])
+                                                                        for K in self.tables.claw]))
+        self._pattern = caches["pattern"][0]
+        mod = self.mod
+        self._stick_table = (mod.IS_STICK != 0) & (np.arange(mod.IS_STICK.shape[1])[None, :] == mod.RIGID[:, :1])
+        self._ungrouped: set = caches["ungrouped"]   # modes whose grouped A failed the probe: built column by column
         self._checked: set = caches["checked"]   # modes whose kept matrix was checked for affinity
         self._probe = np.random.default_rng(0).uniform(-1.0, 1.0, self.n)
         self._factored = None   # the contact modes the stick problem in the work arrays is factored for
@@ -215,21 +228,40 @@ class ContactTangent:
         if A is None:
             A = self._A[key] = self._build_flow_matrix(cm)
         if key not in self._checked:
+            if not self._flow_agrees(A, cm, y) and self._pattern is not None and key not in self._ungrouped:
+                # a pattern that missed an entry reads it into another column: take every column on its own
+                self._ungrouped.add(key)
+                A = self._A[key] = self._build_flow_matrix(cm)
             if not self._flow_agrees(A, cm, y):
                 raise ContactTangentError(f"the flow in contact modes {cm.tolist()} is not affine in the state")
             self._checked.add(key)
         return A
 
-    def _build_flow_matrix(self, cm) -> np.ndarray:
-        n = self.n
-        y = np.zeros(self.ig.n_state)
-        f0 = self._rhs(0.0, y, cm)[:n]
-        A = np.empty((n, n))
-        for i in range(n):
-            y[i] = 1.0
-            A[:, i] = self._rhs(0.0, y, cm)[:n] - f0
-            y[i] = 0.0
-        return A
+    def _build_flow_matrix(self, cm):
+        """``A`` of ``cm`` as a sparse matrix: by column groups of the model's pattern
+        (:mod:`.contact_flow_pattern`), or column by column where there is none or it missed an entry."""
+        from scipy.sparse import csr_matrix
+        n, ns = self.n, self.ig.n_state
+        z = np.zeros(ns)
+
+        def flow(y):
+            z[:n] = y
+            return self._rhs(0.0, z, cm)[:n]
+
+        entries = None
+        if self._pattern is not None and cm.tobytes() not in self._ungrouped:
+            entries = grouped_flow_matrix(flow, n, *self._pattern.groups(self._sticking(cm)))
+        if entries is None:
+            y = np.zeros(n)
+            f0 = flow(y)
+            A = np.empty((n, n))
+            for i in range(n):
+                y[i] = 1.0
+                A[:, i] = flow(y) - f0
+                y[i] = 0.0
+            return csr_matrix(A)
+        rows, cols, values = entries
+        return csr_matrix((values, (rows, cols)), shape=(n, n))
 
     def _flow_agrees(self, A, cm, y) -> bool:
         """Whether ``f(y + p) - f(y - p) = 2 A p`` for the probe ``p`` (scaled to ``y``), to rounding."""
@@ -246,7 +278,7 @@ class ContactTangent:
         key = (cm.tobytes(), rows.tobytes())
         Ar = self._blocks.get(key)
         if Ar is None:
-            Ar = self._blocks[key] = np.ascontiguousarray(A[np.ix_(rows, rows)])
+            Ar = self._blocks[key] = np.ascontiguousarray(A[rows][:, rows].toarray())
         return Ar
 
     def _step_matrix(self, h: float, cm, y, rows=None) -> np.ndarray:
@@ -296,14 +328,7 @@ class ContactTangent:
         key = (cm.tobytes(), int(j), int(gi))
         gy = self._gy.get(key)
         if gy is None:
-            zero = np.zeros(self.ig.n_state)
-            g0 = self._guard(0.0, zero, cm, j, gi)
-            gy = np.empty(self.n)
-            for i in range(self.n):
-                zero[i] = 1.0
-                gy[i] = self._guard(0.0, zero, cm, j, gi) - g0
-                zero[i] = 0.0
-            self._gy[key] = gy
+            self._gy[key] = gy = self._guard_gradient_at_zero(cm, j, gi)
         ig = self.ig
         steps = 1e-6 * np.maximum(np.abs(y[rows]), 1e-3 * np.max(np.abs(y[rows])))
         cols = np.empty(rows.size)
@@ -315,6 +340,37 @@ class ContactTangent:
         local = np.zeros(self.n)
         local[rows] = cols
         return local, gt
+
+    def _sticking(self, cm) -> tuple:
+        """The contacts that stick rigidly in ``cm``."""
+        return tuple(np.flatnonzero(self._stick_table[self.tables.claw, cm]).tolist())
+
+    def _guard_columns(self, cm, j: int):
+        """The states contact ``j``'s guards in ``cm`` can depend on (every one without a pattern)."""
+        if self._pattern is None:
+            return range(self.n)
+        return self._pattern.guard_columns(self._sticking(cm), j)
+
+    def _guard_gradient_at_zero(self, cm, j: int, gi: int) -> np.ndarray:
+        """Contact ``j``'s guard ``gi``'s gradient in ``cm`` by unit differences at the zero state: in the columns the
+        pattern lets it depend on, checked by one difference along the others with weights drawn once (which a
+        missed entry would move: then every column is taken)."""
+        zero = np.zeros(self.ig.n_state)
+        g0 = self._guard(0.0, zero, cm, j, gi)
+        gy = np.zeros(self.n)
+        columns = self._guard_columns(cm, j)
+        if len(columns) < self.n:
+            rest = np.ones(self.n, dtype=bool)
+            rest[columns] = False
+            zero[:self.n][rest] = self._probe[rest]
+            if self._guard(0.0, zero, cm, j, gi) != g0:
+                columns = range(self.n)
+            zero[:] = 0.0
+        for i in columns:
+            zero[i] = 1.0
+            gy[i] = self._guard(0.0, zero, cm, j, gi) - g0
+            zero[i] = 0.0
+        return gy
 
     def _rigid_stick(self, j: int, m: int) -> bool:
         K = int(self.tables.claw[j])
@@ -377,7 +433,7 @@ class ContactTangent:
             return found
         coupled = np.zeros((self.n, self.n), dtype=bool)
         for cm in modes:
-            coupled |= self.flow_matrix(cm, y) != 0
+            coupled[self.flow_matrix(cm, y).nonzero()] = True
         coupled |= coupled.T
         for j in seeds:
             r = self._rows[j]
