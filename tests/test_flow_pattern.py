@@ -4,9 +4,11 @@ The replayed tangent of the per-contact kernel (:mod:`blademodel.numeric.contact
 takes each mode's ``A = df/dy`` and each guard's gradient from differences of the compiled
 ``rhs`` and guards at the zero state. With the model's pattern
 (:mod:`blademodel.numeric.contact_flow_pattern`) columns that share no row are perturbed
-together; these tests take every column on its own instead, with the compiled functions
-directly, and compare to the bit, over every mode and guard an orbit's run meets,
-with rigid stick clusters (Coulomb), law states (bilinear) and a ring that sticks closed.
+together, and the matrix is kept sparse, on rings of ``GROUPED_FROM`` states and more;
+these tests lower that threshold to the small rings they use, take every column on its own
+instead, with the compiled functions directly, and compare to the bit, over every mode and
+guard an orbit's run meets, with rigid stick clusters (Coulomb), law states (bilinear) and
+a ring that sticks closed.
 """
 
 from types import SimpleNamespace
@@ -28,6 +30,12 @@ RINGS = {
     "closed": dict(blades=4, engine_order=0, friction="coulomb", gap=-4e-5, mu=0.3, F0=60.0,
                    mistuning_std=0.2, mistuning_seed=2),
 }
+
+
+@pytest.fixture
+def grouped(monkeypatch):
+    """Group the columns and keep ``A`` sparse on the tests' small rings too."""
+    monkeypatch.setattr(contact_tangent, "GROUPED_FROM", 0)
 
 
 def replayed(name):
@@ -66,7 +74,7 @@ def rhs_of(ig, cm):
 
 
 @pytest.mark.parametrize("name", sorted(RINGS))
-def test_each_modes_grouped_flow_matrix_is_the_column_by_column_one(name):
+def test_each_modes_grouped_flow_matrix_is_the_column_by_column_one(name, grouped):
     """Every mode the run met: ``A`` from the groups equals ``A`` column by column, to the bit, with fewer
     calls of ``rhs``; the modes include rigid stick clusters of several contacts (Coulomb) and, on the closed
     ring, every contact sticking (its columns then each need a group of their own)."""
@@ -96,7 +104,7 @@ def test_each_modes_grouped_flow_matrix_is_the_column_by_column_one(name):
 
 
 @pytest.mark.parametrize("name", ["coulomb", "bilinear"])
-def test_each_guards_gradient_from_its_columns_is_the_column_by_column_one(name):
+def test_each_guards_gradient_from_its_columns_is_the_column_by_column_one(name, grouped):
     """Every guard gradient the replay took (kept per mode and guard): from the columns the pattern allows it to
     depend on, the same as from every column, to the bit."""
     ig, orbit, P = replayed(name)
@@ -116,7 +124,7 @@ def test_each_guards_gradient_from_its_columns_is_the_column_by_column_one(name)
         np.testing.assert_array_equal(gy, column_by_column(guard, ig.n_physical)[0])
 
 
-def test_a_pattern_that_misses_entries_is_found_and_every_column_taken_on_its_own():
+def test_a_pattern_that_misses_entries_is_found_and_every_column_taken_on_its_own(grouped):
     """A pattern without the springs, dampers and contacts: the grouped build sees changes in rows no column of
     the group owns and refuses; the tangent then takes every column on its own, and its monodromy is the one with the full
     pattern, to the bit."""
@@ -135,7 +143,7 @@ def test_a_pattern_that_misses_entries_is_found_and_every_column_taken_on_its_ow
     np.testing.assert_array_equal(again, good)
 
 
-def test_a_grouped_matrix_that_fails_the_probe_is_taken_again_column_by_column(monkeypatch):
+def test_a_grouped_matrix_that_fails_the_probe_is_taken_again_column_by_column(monkeypatch, grouped):
     """A grouped build that reads an entry into the wrong column (simulated: one value moved) passes the
     build's own check but not the probe along a random direction: that mode is then built column by column,
     remembered as such, and the monodromy is the right one, to the bit."""
@@ -159,3 +167,22 @@ def test_a_grouped_matrix_that_fails_the_probe_is_taken_again_column_by_column(m
 def test_a_damped_normal_law_is_not_grouped():
     """A damped contact's ``dN/dt`` reads the accelerations, which the pattern does not follow: no pattern."""
     assert flow_pattern(SimpleNamespace(cnk=np.array([0, NK_DAMPED])), 8, [0, 0]) is None
+
+
+def test_a_small_ring_keeps_the_column_by_column_dense_replay_and_a_large_one_the_same_monodromy(monkeypatch):
+    """Below ``GROUPED_FROM`` states a ring's modes are taken column by column and kept dense (the grouping's own
+    work costs more than it saves there). This 16-blade ring's monodromy that way and grouped (the threshold
+    lowered) agree to rounding (a sparse ``A`` sums the step matrices' products in another order), and the
+    grouped one keeps a fraction of the bytes."""
+    ig, orbit, P = replayed("coulomb")
+    n = ig.n_physical
+    assert n < contact_tangent.GROUPED_FROM and P._contact_tangent._pattern is None
+    dense = P.derivatives(orbit.state, orbit.mode.copy()).monodromy
+    kept = contact_tangent._caches(ig)["A"]
+    assert kept.size == len(kept) * n * n * 8
+    monkeypatch.setattr(contact_tangent, "GROUPED_FROM", 0)
+    contact_tangent._CACHES.clear()
+    sparse = PeriodMap(ig, 1, jacobian="tangent", workers=1).derivatives(orbit.state, orbit.mode.copy()).monodromy
+    kept = contact_tangent._caches(ig)["A"]
+    assert all(hasattr(A, "indptr") for A in kept._d.values()) and kept.size < len(kept) * n * n * 8 / 3
+    np.testing.assert_allclose(sparse, dense, rtol=0, atol=1e-12 * np.max(np.abs(dense)))

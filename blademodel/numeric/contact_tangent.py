@@ -52,6 +52,12 @@ _KEEP = 4
 #: projections get an eighth of it each. A long continuation of a large ring meets thousands of modes (4888
 #: on the 24-blade ring from 270 to 300 rad/s, 360 MB of ``A``; a 100-blade ring's ``A`` is 1.3 MB each).
 KEEP_BYTES = 1 << 29
+#: From this many physical states on (rings of 32 blades), a mode's ``A`` is taken by column groups
+#: (:mod:`.contact_flow_pattern`) and kept as a sparse matrix (a 96-blade ring's is 1.1 % nonzero: 22 kB a mode
+#: instead of 1.2 MB). Below, column by column and dense, as the grouping's own work and the sparse products'
+#: overhead cost more than they save there (``benchmarks/ring_tangent.py``: 0.7-0.95 times as fast cold at 8 to
+#: 24 blades, 1.2 times as fast at 48, 3.8 at 96).
+GROUPED_FROM = 128
 
 
 def _nbytes(value) -> int:
@@ -153,10 +159,11 @@ class ContactTangent:
         self._poly = method.amplification_coefficients()
         caches = _caches(integrator)
         self._A, self._gy = caches["A"], caches["gy"]
-        if not caches["pattern"]:
+        self._large = self.n >= GROUPED_FROM
+        if self._large and not caches["pattern"]:
             caches["pattern"].append(flow_pattern(self.tables, self.n, [int(self.mod.NSTATES[int(K)])
                                                                         for K in self.tables.claw]))
-        self._pattern = caches["pattern"][0]
+        self._pattern = caches["pattern"][0] if self._large else None
         mod = self.mod
         self._stick_table = (mod.IS_STICK != 0) & (np.arange(mod.IS_STICK.shape[1])[None, :] == mod.RIGID[:, :1])
         self._ungrouped: set = caches["ungrouped"]   # modes whose grouped A failed the probe: built column by column
@@ -238,8 +245,8 @@ class ContactTangent:
         return A
 
     def _build_flow_matrix(self, cm):
-        """``A`` of ``cm`` as a sparse matrix: by column groups of the model's pattern
-        (:mod:`.contact_flow_pattern`), or column by column where there is none or it missed an entry."""
+        """``A`` of ``cm``: from :data:`GROUPED_FROM` states on sparse, by column groups of the model's pattern
+        (:mod:`.contact_flow_pattern`) unless there is none or it missed an entry; else dense, column by column."""
         from scipy.sparse import csr_matrix
         n, ns = self.n, self.ig.n_state
         z = np.zeros(ns)
@@ -259,7 +266,7 @@ class ContactTangent:
                 y[i] = 1.0
                 A[:, i] = flow(y) - f0
                 y[i] = 0.0
-            return csr_matrix(A)
+            return csr_matrix(A) if self._large else A
         rows, cols, values = entries
         return csr_matrix((values, (rows, cols)), shape=(n, n))
 
@@ -278,7 +285,8 @@ class ContactTangent:
         key = (cm.tobytes(), rows.tobytes())
         Ar = self._blocks.get(key)
         if Ar is None:
-            Ar = self._blocks[key] = np.ascontiguousarray(A[rows][:, rows].toarray())
+            sub = A[rows][:, rows].toarray() if hasattr(A, "toarray") else A[np.ix_(rows, rows)]
+            Ar = self._blocks[key] = np.ascontiguousarray(sub)
         return Ar
 
     def _step_matrix(self, h: float, cm, y, rows=None) -> np.ndarray:
