@@ -18,11 +18,15 @@ The pattern follows the kernel's forces (:func:`~blademodel.numeric.contact_flow
   stick forces solved jointly from every force on its coordinates: its coordinates'
   accelerations depend on every column that any of those forces depends on.
 
-It is computed from the tables alone (it holds for every value of the parameters). A
-contact whose normal law is damped reads the accelerations (its ``dN/dt``), which this
-pattern does not follow: such models are not grouped (:func:`flow_pattern` returns
-``None``). The build checks itself: a change in a row that no column of the group owns
-means the pattern missed an entry, and the caller then takes every column on its own.
+The same rows tell which columns a contact's guards can depend on
+(:meth:`FlowPattern.guard_columns`). The pattern is computed from the tables alone (it
+holds for every value of the parameters). A contact whose normal law is damped reads the
+accelerations (its ``dN/dt``), which this pattern does not follow: such models are not
+grouped (:func:`flow_pattern` returns ``None``). The build checks itself: a change in a
+row that no column of the group owns means the pattern missed an entry, and the caller
+(:class:`~blademodel.numeric.contact_tangent.ContactTangent`) then takes every column on
+its own; it also checks each matrix along a random direction, which finds an entry read
+into the wrong column.
 """
 
 from __future__ import annotations
