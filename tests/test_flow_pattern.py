@@ -11,18 +11,22 @@ guard an orbit's run meets, with rigid stick clusters (Coulomb), law states (bil
 a ring that sticks closed.
 """
 
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from blademodel.config import BladedDisk
+from blademodel.config import BladedDisk, load_config
 from blademodel.numeric import contact_tangent
 from blademodel.numeric.contact_flow_pattern import FlowPattern, flow_pattern, grouped_flow_matrix
 from blademodel.numeric.contract import NK_DAMPED
 from blademodel.numeric.kernels import make_integrator
 from blademodel.orbits import find_periodic_orbit
 from blademodel.orbits.period_map import PeriodMap
+from blademodel.zheng2022 import BladePair
+
+MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
 
 RINGS = {
     "coulomb": dict(blades=16, engine_order=2, friction="coulomb", mistuning_std=0.05, mistuning_seed=1),
@@ -186,3 +190,34 @@ def test_a_small_ring_keeps_the_column_by_column_dense_replay_and_a_large_one_th
     kept = contact_tangent._caches(ig)["A"]
     assert all(hasattr(A, "indptr") for A in kept._d.values()) and kept.size < len(kept) * n * n * 8 / 3
     np.testing.assert_allclose(sparse, dense, rtol=0, atol=1e-12 * np.max(np.abs(dense)))
+
+
+MODELS = {
+    "pair-coulomb": lambda: BladePair(friction="coulomb").build(),
+    "pair-bilinear": lambda: BladePair(friction="bilinear").build(),
+    "row-of-three": lambda: load_config(MODELS_DIR / "blade_row_3.yaml").build(),
+    "den-hartog": lambda: load_config(MODELS_DIR / "friction_oscillator.yaml").build(),
+    "ring-bilinear-mistuned": lambda: BladedDisk(blades=6, engine_order=2, friction="bilinear", mistuning_std=0.05,
+                                                 mistuning_seed=4, omega=286.0).build(),
+}
+
+
+@pytest.mark.parametrize("name", sorted(MODELS))
+def test_the_pattern_holds_on_every_kind_of_per_contact_model(name, grouped):
+    """The pattern is read from the tables of any per-contact model, not only rings: the pair, a row of three
+    blades with one Coulomb and one Jenkins shroud, Den Hartog's oscillator (a ground contact under a constant
+    load), a mistuned ring. On each, after 30 periods from rest, the grouped replay needs no column-by-column
+    fallback and its monodromy is the dense one's to rounding."""
+    from blademodel.numeric.kernels import make_integrator as make
+    ig = make(MODELS[name](), kernel="contact", steps_per_period=600)
+    y = ig.initial_state()
+    _, mode, _ = ig.advance(y, ig.mode_of(y), 0, 30)
+    y = y[:ig.n_physical].copy()
+    P = PeriodMap(ig, 1, jacobian="tangent", workers=1)
+    M = P.derivatives(y, mode.copy()).monodromy
+    tan = P._contact_tangent
+    assert tan._pattern is not None and not tan._ungrouped and len(contact_tangent._caches(ig)["A"]) >= 2
+    contact_tangent.GROUPED_FROM = 1 << 62    # the fixture puts it back
+    contact_tangent._CACHES.clear()
+    ref = PeriodMap(ig, 1, jacobian="tangent", workers=1).derivatives(y, mode.copy()).monodromy
+    np.testing.assert_allclose(M, ref, rtol=0, atol=1e-12 * np.max(np.abs(ref)))
