@@ -49,14 +49,15 @@ from .tangent import SensitivityError
 _CACHES: OrderedDict = OrderedDict()
 _KEEP = 4
 #: The most bytes the modes' matrices ``A`` of one model may hold; the blocks, guard gradients, clusters and
-#: projections get an eighth of it each. A long continuation of a large ring meets thousands of modes (4888
-#: on the 24-blade ring from 270 to 300 rad/s, 360 MB of ``A``; a 100-blade ring's ``A`` is 1.3 MB each).
+#: projections get an eighth of it each. A long continuation of a ring meets thousands of modes (4888 on the
+#: 24-blade ring from 270 to 300 rad/s, 360 MB of dense ``A``; from :data:`GROUPED_FROM` states on they are
+#: sparse, 22-28 kB each at 96 blades, where dense they were 1.2 MB and a period's 2672 overflowed the budget).
 KEEP_BYTES = 1 << 29
 #: From this many physical states on (rings of 32 blades), a mode's ``A`` is taken by column groups
 #: (:mod:`.contact_flow_pattern`) and kept as a sparse matrix (a 96-blade ring's is 1.1 % nonzero: 22 kB a mode
 #: instead of 1.2 MB). Below, column by column and dense, as the grouping's own work and the sparse products'
 #: overhead cost more than they save there (``benchmarks/ring_tangent.py``: 0.7-0.95 times as fast cold at 8 to
-#: 24 blades, 1.2 times as fast at 48, 3.8 at 96).
+#: 24 blades, 1.2 times as fast at 48, 2.2-2.4 cold and 4.8-5.0 warm at 96).
 GROUPED_FROM = 128
 
 
