@@ -109,13 +109,15 @@ class FlowPattern:
             out.append(tuple(sorted(cluster)))
         return out
 
-    def _cluster(self, cluster: tuple) -> tuple[np.ndarray, np.ndarray]:
-        """A cluster's rows (its coordinates' velocities, its law states) and the columns they hold (kept)."""
+    def _cluster(self, cluster: tuple) -> tuple:
+        """A cluster's rows (its coordinates' velocities, its law states), the columns they hold, and the
+        (row, column) pairs of that block (kept)."""
         found = self._cluster_rows.get(cluster)
         if found is None:
             rows = np.unique(np.concatenate([self.nq + self._slots[j] for j in cluster]
                                             + [self._law_rows[j] for j in cluster]))
-            found = self._cluster_rows[cluster] = (rows, np.flatnonzero(self.base[rows].any(axis=0)))
+            cols = np.flatnonzero(self.base[rows].any(axis=0))
+            found = self._cluster_rows[cluster] = (rows, cols, np.repeat(rows, cols.size), np.tile(cols, rows.size))
         return found
 
     def guard_columns(self, sticking: tuple, j: int) -> np.ndarray:
@@ -146,18 +148,17 @@ class FlowPattern:
             return self._groups, self._owners
         n, G = self.n, len(self._groups)
         info = [self._cluster(c) for c in clusters]
-        ranked = np.concatenate([cols for _, cols in info])
-        ranks = np.concatenate([np.arange(cols.size) for _, cols in info])
+        ranked = np.concatenate([c[1] for c in info])
         if ranked.size == 0:
             return self._groups, self._owners
+        ranks = np.concatenate([np.arange(c[1].size) for c in info])
         coupled, first = np.unique(ranked, return_index=True)
         gid = self._group_of.copy()
         gid[coupled] = G + ranks[first]
         # their entries: the base pattern's and the clusters' rows
         br, bc = self._rows_of(coupled)
-        er = np.concatenate([np.repeat(rows, cols.size) for rows, cols in info])
-        ec = np.concatenate([np.tile(cols, rows.size) for rows, cols in info])
-        pc, pr = np.concatenate([bc, ec]), np.concatenate([br, er])
+        pc = np.concatenate([bc] + [c[3] for c in info])
+        pr = np.concatenate([br] + [c[2] for c in info])
         # a row held by two columns of one new group: all but the least of them get groups of their own
         slot = gid[pc] * n + pr
         order = np.lexsort((pc, slot))

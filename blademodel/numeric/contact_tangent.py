@@ -249,12 +249,15 @@ class ContactTangent:
         """``A`` of ``cm``: from :data:`GROUPED_FROM` states on sparse, by column groups of the model's pattern
         (:mod:`.contact_flow_pattern`) unless there is none or it missed an entry; else dense, column by column."""
         from scipy.sparse import csr_matrix
-        n, ns = self.n, self.ig.n_state
-        z = np.zeros(ns)
+        ig, n = self.ig, self.n
+        z, out = np.zeros(ig.n_state), np.empty(ig.n_state)
+        self._factor(cm)   # once: nothing below uses the work arrays for another mode
+        rhs, args = self.mod.rhs, (cm, ig.I, ig.R, ig.WI, ig.WF, out)
 
         def flow(y):
             z[:n] = y
-            return self._rhs(0.0, z, cm)[:n]
+            rhs(0.0, z, *args)
+            return out[:n].copy()
 
         entries = None
         if self._pattern is not None and cm.tobytes() not in self._ungrouped:
