@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from blademodel.config import BladedDisk, load_config
-from blademodel.numeric import contact_tangent
+from blademodel.numeric import contact_flow_pattern, contact_tangent
 from blademodel.numeric.contact_flow_pattern import FlowPattern, flow_pattern, grouped_flow_matrix
 from blademodel.numeric.contract import NK_DAMPED
 from blademodel.numeric.kernels import make_integrator
@@ -221,3 +221,21 @@ def test_the_pattern_holds_on_every_kind_of_per_contact_model(name, grouped):
     contact_tangent._CACHES.clear()
     ref = PeriodMap(ig, 1, jacobian="tangent", workers=1).derivatives(y, mode.copy()).monodromy
     np.testing.assert_allclose(M, ref, rtol=0, atol=1e-12 * np.max(np.abs(ref)))
+
+
+def test_the_clusters_kept_are_bounded_and_move_no_result(monkeypatch, grouped):
+    """The clusters' rows and block pairs are kept to ``CLUSTER_BYTES`` (a ring sticking in arcs has thousands):
+    with the bound at 2 kB (most dropped and computed again) every mode's ``A`` is the one kept with room for
+    all of them, to the bit, and the kept bytes stay within the bound."""
+    ig, orbit, P = replayed("coulomb")
+    roomy = {k: A.toarray() for k, A in contact_tangent._caches(ig)["A"]._d.items()}
+    monkeypatch.setattr(contact_flow_pattern, "CLUSTER_BYTES", 2048)
+    contact_tangent._CACHES.clear()
+    Q = PeriodMap(ig, 1, jacobian="tangent", workers=1)
+    Q.derivatives(orbit.state, orbit.mode.copy())
+    tight = contact_tangent._caches(ig)["A"]._d
+    assert tight.keys() == roomy.keys()
+    for k, A in tight.items():
+        np.testing.assert_array_equal(A.toarray(), roomy[k])
+    pattern = Q._contact_tangent._pattern
+    assert pattern._cluster_bytes <= 2048 or len(pattern._cluster_rows) == 1

@@ -35,6 +35,10 @@ import numpy as np
 
 from .contract import NK_DAMPED
 
+#: The most bytes the clusters' rows, columns and block pairs may keep (a ring sticking in arcs of every length
+#: has thousands of clusters, the longest with blocks of about ``16 k^2`` pairs for ``k`` contacts).
+CLUSTER_BYTES = 1 << 26
+
 
 class FlowPattern:
     """The nonzero pattern of a per-contact model's ``A`` by which contacts stick rigidly, and its column groups.
@@ -84,6 +88,7 @@ class FlowPattern:
         self._owners = np.full((len(self._groups), n), -1, dtype=np.int64)
         self._owners[self._group_of[cols], rows] = cols
         self._cluster_rows: dict = {}
+        self._cluster_bytes = 0
 
     def _rows_of(self, columns: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(rows, columns)`` of every entry of the base pattern in ``columns``."""
@@ -117,7 +122,13 @@ class FlowPattern:
             rows = np.unique(np.concatenate([self.nq + self._slots[j] for j in cluster]
                                             + [self._law_rows[j] for j in cluster]))
             cols = np.flatnonzero(self.base[rows].any(axis=0))
-            found = self._cluster_rows[cluster] = (rows, cols, np.repeat(rows, cols.size), np.tile(cols, rows.size))
+            found = (rows, cols, np.repeat(rows, cols.size), np.tile(cols, rows.size))
+            size = sum(a.nbytes for a in found)
+            if self._cluster_bytes + size > CLUSTER_BYTES:   # arcs of a ring are many: forget them all, start again
+                self._cluster_rows.clear()
+                self._cluster_bytes = 0
+            self._cluster_rows[cluster] = found
+            self._cluster_bytes += size
         return found
 
     def guard_columns(self, sticking: tuple, j: int) -> np.ndarray:
