@@ -145,6 +145,24 @@ def kernel_runner(integ, y0, mode0: int, start: int, end: int):
     return run
 
 
+def clocks(f):
+    """``(result, wall s, process CPU s)`` of ``f()``."""
+    w, c = time.perf_counter(), time.process_time()
+    out = f()
+    return out, time.perf_counter() - w, time.process_time() - c
+
+
+def ring_state(cfg, steps: int, periods: int = 50):
+    """A ring's integrator, its state after ``periods`` from rest (physical states), mode and state scale."""
+    from blademodel.numeric.kernels import make_integrator
+    ig = make_integrator(cfg.build(), steps_per_period=steps)
+    y = ig.initial_state()
+    status, mode, _ = ig.advance(y, ig.mode_of(y), 0, periods)
+    assert status == 0
+    y = y[:ig.n_physical].copy()
+    return ig, y, mode, np.maximum(np.abs(y), 1e-3 * np.abs(y).max())
+
+
 def interleaved(funcs: dict, repeats: int, clock=cpu_time) -> dict:
     """Time each callable ``repeats`` times, interleaved; returns ``{name: [times]}``."""
     times = {k: [] for k in funcs}

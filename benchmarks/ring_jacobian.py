@@ -52,22 +52,10 @@ def ring(blades: int):
     return apply_overrides(load_config(C.ROOT / "models" / "bladed_disk_24.yaml"), {"blades": str(blades)})
 
 
-def clocks(f):
-    """``(result, wall s, process CPU s)`` of ``f()``."""
-    w, c = time.perf_counter(), time.process_time()
-    out = f()
-    return out, time.perf_counter() - w, time.process_time() - c
-
-
 def jacobian_rows(blades_list, repeats, workers):
     rows = []
     for blades in blades_list:
-        ig = make_integrator(ring(blades).build(), steps_per_period=STEPS)
-        y = ig.initial_state()
-        status, mode, _ = ig.advance(y, ig.mode_of(y), 0, 50)
-        assert status == 0
-        y = y[:ig.n_physical].copy()
-        scale = np.maximum(np.abs(y), 1e-3 * np.abs(y).max())
+        ig, y, mode, scale = C.ring_state(ring(blades), STEPS)
         runs = {1: [], workers: [], "forward": [], "cold": [], "warm": []}
         ref = fwd = tan = None
         for _ in range(repeats):
@@ -76,12 +64,12 @@ def jacobian_rows(blades_list, repeats, workers):
                     if w == "cold":
                         contact_tangent._CACHES.clear()
                     pm = PeriodMap(ig, jacobian="tangent")
-                    tan, wall, cpu = clocks(lambda: pm.jacobian(y, mode, scale))
+                    tan, wall, cpu = C.clocks(lambda: pm.jacobian(y, mode, scale))
                     runs[w].append((wall, cpu))
                     continue
                 pm = PeriodMap(ig, jacobian="forward", workers=workers) if w == "forward" else \
                     PeriodMap(ig, jacobian="differences", workers=w)
-                J, wall, cpu = clocks(lambda: pm.differences(y, mode, scale))
+                J, wall, cpu = C.clocks(lambda: pm.differences(y, mode, scale))
                 if w == "forward":
                     fwd = J
                 else:
@@ -115,7 +103,7 @@ def branch_row(points, repeats, workers):
         for w in times:
             contact_tangent._CACHES.clear()
             jac, threads = ("tangent", 1) if w == "tangent" else ("differences", w)
-            b, wall, cpu = clocks(lambda: continuation(cfg, "omega", 280.0, 292.0, max_points=points,
+            b, wall, cpu = C.clocks(lambda: continuation(cfg, "omega", 280.0, 292.0, max_points=points,
                                                        steps_per_period=STEPS, transient=50, workers=threads,
                                                        jacobian=jac))
             if w == "tangent":

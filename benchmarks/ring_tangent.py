@@ -54,30 +54,19 @@ def now(on: bool) -> None:
     contact_tangent._CACHES.clear()
 
 
-def clocks(f):
-    w, c = time.perf_counter(), time.process_time()
-    out = f()
-    return out, time.perf_counter() - w, time.process_time() - c
-
-
 def jacobian_rows(blades_list, repeats):
     rows = []
     for blades in blades_list:
-        ig = make_integrator(ring(blades).build(), steps_per_period=STEPS)
-        y = ig.initial_state()
-        status, mode, _ = ig.advance(y, ig.mode_of(y), 0, 50)
-        assert status == 0
-        y = y[:ig.n_physical].copy()
-        scale = np.maximum(np.abs(y), 1e-3 * np.abs(y).max())
+        ig, y, mode, scale = C.ring_state(ring(blades), STEPS)
         t = {(g, k): [] for g in (True, False) for k in ("cold", "warm")}
         found, kept_bytes, modes = {}, {}, {}
         for _ in range(repeats):
             for g in (True, False):
                 now(g)
                 pm = PeriodMap(ig, jacobian="tangent", workers=1)
-                J, wall, _ = clocks(lambda: pm.jacobian(y, mode, scale))
+                J, wall, _ = C.clocks(lambda: pm.jacobian(y, mode, scale))
                 t[g, "cold"].append(wall)
-                J, wall, _ = clocks(lambda: pm.jacobian(y, mode, scale))
+                J, wall, _ = C.clocks(lambda: pm.jacobian(y, mode, scale))
                 t[g, "warm"].append(wall)
                 found[g] = J
                 kept = contact_tangent._caches(ig)["A"]
@@ -104,7 +93,7 @@ def branch_row(blades, points, repeats):
     for _ in range(repeats):
         for g in (True, False):
             now(g)
-            b, wall, cpu = clocks(lambda: continuation(cfg, "omega", 280.0, 300.0, max_points=points,
+            b, wall, cpu = C.clocks(lambda: continuation(cfg, "omega", 280.0, 300.0, max_points=points,
                                                        steps_per_period=STEPS, transient=50, workers=1))
             if ref is None:
                 ref = b

@@ -238,4 +238,4 @@ def test_the_clusters_kept_are_bounded_and_move_no_result(monkeypatch, grouped):
     for k, A in tight.items():
         np.testing.assert_array_equal(A.toarray(), roomy[k])
     pattern = Q._contact_tangent._pattern
-    assert pattern._cluster_bytes <= 2048 or len(pattern._cluster_rows) == 1
+    assert pattern._cluster_rows.size <= 2048 or len(pattern._cluster_rows) == 1

@@ -34,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from .contract import NK_DAMPED
+from .kept import Kept
 
 #: The most bytes the clusters' rows, columns and block pairs may keep (a ring sticking in arcs of every length
 #: has thousands of clusters, the longest with blocks of about ``16 k^2`` pairs for ``k`` contacts).
@@ -87,8 +88,7 @@ class FlowPattern:
         self._column_ptr = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=n))])
         self._owners = np.full((len(self._groups), n), -1, dtype=np.int64)
         self._owners[self._group_of[cols], rows] = cols
-        self._cluster_rows: dict = {}
-        self._cluster_bytes = 0
+        self._cluster_rows = Kept(CLUSTER_BYTES)
 
     def _rows_of(self, columns: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(rows, columns)`` of every entry of the base pattern in ``columns``."""
@@ -122,13 +122,7 @@ class FlowPattern:
             rows = np.unique(np.concatenate([self.nq + self._slots[j] for j in cluster]
                                             + [self._law_rows[j] for j in cluster]))
             cols = np.flatnonzero(self.base[rows].any(axis=0))
-            found = (rows, cols, np.repeat(rows, cols.size), np.tile(cols, rows.size))
-            size = sum(a.nbytes for a in found)
-            if self._cluster_bytes + size > CLUSTER_BYTES:   # arcs of a ring are many: forget them all, start again
-                self._cluster_rows.clear()
-                self._cluster_bytes = 0
-            self._cluster_rows[cluster] = found
-            self._cluster_bytes += size
+            found = self._cluster_rows[cluster] = (rows, cols, np.repeat(rows, cols.size), np.tile(cols, rows.size))
         return found
 
     def guard_columns(self, sticking: tuple, j: int) -> np.ndarray:

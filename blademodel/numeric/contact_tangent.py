@@ -40,6 +40,7 @@ import numpy as np
 
 from .blas_threads import blas_threads_for
 from .contact_flow_pattern import flow_pattern, grouped_flow_matrix
+from .kept import Kept as _Kept
 from .tangent import SensitivityError
 
 #: The modes' matrices and guard gradients of the last few models, by what they are computed from
@@ -59,47 +60,6 @@ KEEP_BYTES = 1 << 29
 #: overhead cost more than they save there (``benchmarks/ring_tangent.py``: 0.7-0.95 times as fast cold at 8 to
 #: 24 blades, 1.2 times as fast at 48, 2.2-2.4 cold and 4.8-5.0 warm at 96).
 GROUPED_FROM = 128
-
-
-def _nbytes(value) -> int:
-    if isinstance(value, np.ndarray):
-        return value.nbytes
-    if hasattr(value, "indptr"):   # a sparse matrix (a mode's A)
-        return value.data.nbytes + value.indices.nbytes + value.indptr.nbytes
-    if isinstance(value, (list, tuple)):
-        return 64 + sum(_nbytes(v) for v in value)
-    return 64
-
-
-class _Kept:
-    """Values by key, the least recently used dropped once they hold more than ``budget`` bytes.
-
-    What is kept here is computed from the model's values alone, so a dropped value is
-    computed again bit for bit the same: the budget moves the cost, never a result.
-    """
-
-    def __init__(self, budget: int):
-        self.budget, self.size, self._d = int(budget), 0, OrderedDict()
-        self.dropped = 0
-
-    def get(self, key):
-        value = self._d.get(key)
-        if value is not None:
-            self._d.move_to_end(key)
-        return value
-
-    def __setitem__(self, key, value):
-        old = self._d.pop(key, None)
-        if old is not None:
-            self.size -= _nbytes(old)
-        self._d[key] = value
-        self.size += _nbytes(value)
-        while self.size > self.budget and len(self._d) > 1:
-            self.size -= _nbytes(self._d.popitem(last=False)[1])
-            self.dropped += 1
-
-    def __len__(self):
-        return len(self._d)
 
 
 def _caches(integrator) -> dict:
@@ -166,6 +126,7 @@ class ContactTangent:
                                                                         for K in self.tables.claw]))
         self._pattern = caches["pattern"][0] if self._large else None
         mod = self.mod
+        # by law and mode: a rigid stick (the law's stick mode that its stick force holds rigidly)
         self._stick_table = (mod.IS_STICK != 0) & (np.arange(mod.IS_STICK.shape[1])[None, :] == mod.RIGID[:, :1])
         self._ungrouped: set = caches["ungrouped"]   # modes whose grouped A failed the probe: built column by column
         self._checked: set = caches["checked"]   # modes whose kept matrix was checked for affinity
@@ -385,8 +346,7 @@ class ContactTangent:
         return gy
 
     def _rigid_stick(self, j: int, m: int) -> bool:
-        K = int(self.tables.claw[j])
-        return bool(self.mod.IS_STICK[K, m]) and int(self.mod.RIGID[K, 0]) == m
+        return bool(self._stick_table[self.tables.claw[j], m])
 
     def _reset_jacobian(self, t, y, cm, j, gi, rows):
         """``d y+ / d y`` of contact ``j``'s transition by guard ``gi`` at ``y`` and the state after it; ``None`` and
