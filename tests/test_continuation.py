@@ -480,6 +480,23 @@ def test_the_coulomb_pair_passes_its_nonsmooth_fold_from_the_unstable_arm():
     assert both.sum() >= 1 and np.all(np.abs(upper - sweep[both]) > 3e-3 * sweep[both])
 
 
+@pytest.mark.parametrize("ds_max", [0.02, 0.05, 0.2])
+def test_the_coulomb_pair_passes_its_nonsmooth_fold_at_every_step_length(ds_max):
+    """From 400 to 440 rad/s, whatever the longest step, the Coulomb pair's branch turns at its nonsmooth fold
+    (420.684 rad/s), comes down the unstable arm to the smooth fold (420.350) and goes on up to 440. With the new
+    arm's tangent oriented away from the last point instead of away from the kink, a step that landed on the
+    unstable arm nearer the kink than the last point was walked that arm into the kink, turned there back onto
+    the stable arm and retraced the branch down to 400 (at ds_max 0.05, measured), or reported the turn as a
+    smooth fold with a multiplier of 1.066 (at 0.02)."""
+    b = continuation(BladePair(friction="coulomb"), "omega", 400.0, 440.0, ds_max=ds_max, max_points=400, workers=1)
+    assert b.message == "reached omega = 440"
+    (nf,), (fold,) = b.points("nonsmooth-fold"), b.points("fold")
+    assert abs(nf.param - 420.684) < 2e-3 and abs(abs(nf.multiplier) - 1) > 0.05
+    assert abs(fold.param - 420.3499) < 1e-3 and abs(abs(fold.multiplier) - 1) < 1e-3
+    assert not b.stable[nf.index + 1:fold.index + 1].any()   # the unstable arm between the two
+    assert b.stable[:nf.index + 1].all() and b.stable[fold.index + 1:].all()
+
+
 def test_the_coulomb_pair_crosses_a_kink_where_the_arclength_corrections_fail():
     """Near 164.914 rad/s a stick phase of the Coulomb pair's orbit appears (a multiplier jumps from 0.175 to
     0.068): the arclength corrections fail at every step length there, and the branch used to stop. Shooting at
@@ -508,11 +525,14 @@ def test_the_bilinear_pair_turns_back_only_at_its_folds():
     b = continuation(BladePair(friction="bilinear"), "omega", 600.0, 150.0, max_points=3000, workers=1)
     assert b.message == "reached omega = 150" and np.all(b.residuals <= 1e-10)
     d = np.sign(np.diff(b.params))
-    turns = b.params[np.flatnonzero(d[1:] != d[:-1]) + 1]
-    folds = np.array(sorted(p.param for p in b.special if p.kind in ("fold", "nonsmooth-fold")))
+    turns = np.flatnonzero(d[1:] != d[:-1]) + 1   # the points where omega's direction reverses
+    folds = [p for p in b.special if p.kind in ("fold", "nonsmooth-fold")]
     assert len(turns) == len(folds) == 8
-    assert all(np.min(np.abs(folds - w)) < 0.2 for w in turns)
-    assert np.min(np.abs(folds - 398.3718)) < 1e-3 and np.min(np.abs(folds - 398.4672)) < 1e-3
+    # each turn within a step of a located fold: the fold lies in one of the turn's two steps (a step may
+    # pass the fold's tip, 0.24 rad/s past both its points at 453.8 rad/s)
+    assert all(any(q.index in (i - 1, i) for q in folds) for i in turns)
+    at = np.array([q.param for q in folds])
+    assert np.min(np.abs(at - 398.3718)) < 1e-3 and np.min(np.abs(at - 398.4672)) < 1e-3
 
 
 class _SyntheticBranch:
