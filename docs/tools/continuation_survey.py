@@ -3,8 +3,8 @@
 Run from the repository root: ``python docs/tools/continuation_survey.py``. Prints, for each
 branch, its points, its special points by kind and why it ended (about 1 min). The table in
 ``docs/orbits.md`` ("How far branches get") comes from it. With ``--scan`` it runs the omega
-branches of both laws, both ways, at each longest step ``ds_max`` in 0.02, 0.05, 0.1 and 0.2
-instead (about 3 min): whether the branches get through at every step length.
+branches of both laws, both ways, at each longest step ``ds_max`` in :data:`SCAN` instead
+(about 3 min): whether the branches get through at every step length.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ JOBS = [(law, "omega", 150.0, 600.0) for law in ("coulomb", "bilinear")] + \
        [(law, f, a, b) for f, a, b in (("gamma", 0.5, 10.0), ("F0", 5.0, 120.0), ("gap", 1e-5, 2.5e-4),
                                        ("mu", 0.05, 1.0)) for law in ("coulomb", "bilinear")]
 #: The longest steps of ``--scan`` (the default is 0.05).
-SCAN = (0.02, 0.05, 0.1, 0.2)
+SCAN = (0.02, 0.03, 0.05, 0.07, 0.1, 0.15, 0.2, 0.3)
 
 
 def main():
