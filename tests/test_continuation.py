@@ -501,9 +501,10 @@ def test_the_coulomb_pair_passes_its_nonsmooth_fold_at_every_step_length(ds_max)
 def test_the_coulomb_pair_s_whole_branch_gets_through_at_long_steps(start, stop, ds_max):
     """At long steps the Coulomb pair's branch over 150 ... 600 rad/s reaches its end with its three folds, its
     nonsmooth fold and its four period doublings, each once. Before this stop's changes to the corrections' first
-    matrix and to the tangent past a kink, these three settings (of 16 scanned) did not: up at 0.15 the branch
-    turned back at 220.25 rad/s, where a step crossed grazings (16 events to 10), and left through 150 rad/s; down
-    at 0.07 and 0.3 it retraced itself from the nonsmooth fold and found every bifurcation twice."""
+    matrix and to the tangent past a kink, these three settings (of 32 scanned) did not: up at 0.15 a long step
+    across grazings landed on an orbit of 10 events at 220.25 rad/s whose branch goes down, and the continuation
+    left through 150 rad/s; down at 0.07 and 0.3 it retraced itself from the nonsmooth fold and found every
+    bifurcation twice."""
     b = continuation(BladePair(friction="coulomb"), "omega", start, stop, ds_max=ds_max, max_points=3000, workers=1)
     assert b.message == f"reached omega = {stop:g}"
     kinds = [q.kind for q in b.special]
