@@ -684,14 +684,12 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
         off_circle = any(_at_kink(q) for q in found)
         retry = any(_off_circle(q) for q in found)
-        T_away = None
-        if off_circle:
-            # the new point lies on another arm, past a kink: onward on it is away from the kink
-            T_away = _away_from_kink(ctx, X_new, m_new, A_new, new["events"], X_new - X)
+        T_away = None   # past a kink the new point lies on another arm: onward on it is away from the kink
         if not retry and any(q.kind == "border-collision" for q in found):
             # a border collision is off the circle by nature: where the branch goes on through it (its new
             # tangent, oriented away from the kink, keeps the field's direction) it is kept; where it
             # turns back it is a nonsmooth fold, approached by shorter steps as before
+            T_away = _away_from_kink(ctx, X_new, m_new, A_new, new["events"], X_new - X)
             retry = float(T_away[-1]) * float(T[-1]) < 0
         if not jumped and h / 2 >= ds_min and retry:
             # the stability changed, but no multiplier lies on the unit circle where the change is
@@ -706,7 +704,8 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             # the last one, so orienting it by that one (or taking the secant to it, where the
             # point was shot at a value of the field) would lead back into the fold. Onward is
             # away from the kink (:func:`_away_from_kink`)
-            T_new = T_away if T_away is not None else _tangent(A_new, X_new - X)
+            T_new = T_away if T_away is not None else \
+                _away_from_kink(ctx, X_new, m_new, A_new, new["events"], X_new - X)
         elif secant:   # the difference quotients there may straddle the kink: the secant is the tangent
             T_new = (X_new - X) / np.linalg.norm(X_new - X)
         elif jumped:   # across a kink: onward is away from the last point
