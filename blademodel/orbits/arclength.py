@@ -45,7 +45,7 @@ from ..numeric.blas_threads import blas_threads_for
 from .background import Locator, PendingPoint, resolve
 from .field_path import AffineFieldPath
 from .period_map import FlowError, PeriodMap, _copy, _key, worker_count
-from .shooting import _n_coordinates, _orbit_samples, _same, _state_scale, find_periodic_orbit
+from .shooting import _n_coordinates, _orbit_samples, _same, _scale_of_excursions, _state_scale, find_periodic_orbit
 
 
 @dataclass
@@ -729,7 +729,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         pts.append(new)
         # each state scaled by its excursion on the newest orbit: amplitudes that grow a
         # hundredfold through a resonance do not shrink the steps a hundredfold
-        X, T, A = ctx.rescale(_state_scale(new["Y"], n_q), X_new, T_new, A_new)
+        X, T, A = ctx.rescale(_scale_of_excursions(new["magnitude"], n_q), X_new, T_new, A_new)
         new["X"], new["A"] = X, A
         m = m_new
         h = min(h * 1.5, ds_max) if iterations <= 4 else (h if iterations <= 8 else h / 2)
@@ -1109,23 +1109,25 @@ class _Context:
 
     def point(self, X, mode, A):
         """The branch point's record from its scaled unknowns and Jacobian."""
-        mu = self.multipliers(A)
+        n = self.n
+        J = A[:, :n] * self.scale[:, None] / self.scale[None, :] + np.eye(n)   # in physical units
+        mu = np.linalg.eigvals(J)
+        mu = mu[np.argsort(-np.abs(mu), kind="stable")]   # as multipliers(A)
         lam = X[-1] * self.span
         P = self.fam.map_at(lam)
         y = X[:-1] * self.scale
         r = P.run(y, mode)
         Y = r.Y
         residual = float(np.max(np.abs(r.end[:self.n] - y) / self.scale))
-        amp = 0.5 * (Y.max(axis=0) - Y.min(axis=0))
+        top, bottom = Y.max(axis=0), Y.min(axis=0)
+        amp = 0.5 * (top - bottom)
         c = dft_bin(Y[:-1], self.fam.periods) * 2.0 / (Y.shape[0] - 1)
         S = P.integrator.steps_per_period
-        n = self.n
         return {"param": lam, "state": y, "sections": Y[:-1:S].copy(), "mu": mu, "stable": bool(np.max(np.abs(mu)) < 1.0), "amp": amp,
                 "h1": c, "unstable": _unstable_count(mu), "X": X.copy(), "mode": _copy(mode), "A": A, "Y": Y,
                 "events": r.events, "regular": True, "residual": residual,
-                # the Jacobian in physical units (the scale changes from point to point)
-                "J": A[:, :n] * self.scale[:, None] / self.scale[None, :] + np.eye(n),
-                "dl": A[:, n] * self.scale / self.span}
+                "magnitude": np.maximum(top, -bottom),   # each state's largest |value| on the orbit
+                "J": J, "dl": A[:, n] * self.scale / self.span}
 
     def detect(self, a, b, Xa, Ta, mode, index, locate_tol):
         """The bifurcations between consecutive points ``a`` and ``b``, each located on the arclength.

@@ -92,7 +92,11 @@ class PeriodicOrbit:
 
 def _state_scale(y_hist: np.ndarray, n_q: int) -> np.ndarray:
     """Per-state scale for residuals and difference steps: each state's excursion, floored by its group's."""
-    amp = np.max(np.abs(y_hist), axis=0)
+    return _scale_of_excursions(np.max(np.abs(y_hist), axis=0), n_q)
+
+
+def _scale_of_excursions(amp: np.ndarray, n_q: int) -> np.ndarray:
+    """:func:`_state_scale` from each state's largest magnitude ``amp``."""
     scale = amp.copy()
     n = amp.size
     for sl in (slice(0, n_q), slice(n_q, 2 * n_q), slice(2 * n_q, n)):
