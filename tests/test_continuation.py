@@ -8,7 +8,7 @@ from blademodel.zheng2022 import BladePair
 from blademodel.numeric import simulate
 from blademodel.numeric.kernels import make_integrator
 from blademodel.numeric.contract import C_EVENTS, N_COUNTERS
-from blademodel.orbits import PeriodMap, continuation, find_periodic_orbit, period_doubled_branch
+from blademodel.orbits import PeriodMap, ShootingError, continuation, find_periodic_orbit, period_doubled_branch
 from linear_reference import forced_response
 
 
@@ -509,6 +509,25 @@ def test_the_coulomb_pair_s_whole_branch_gets_through_at_long_steps(start, stop,
     assert b.message == f"reached omega = {stop:g}"
     kinds = [q.kind for q in b.special]
     assert (kinds.count("fold"), kinds.count("nonsmooth-fold"), kinds.count("period-doubling")) == (3, 1, 4)
+
+
+def test_a_branch_that_cannot_start_says_where_and_what_may_find_an_orbit(capsys):
+    """At mu = 1 the bilinear pair's motion from rest is not near a period-1 orbit after 20 periods: shooting stalls
+    at a residual of 0.26. The error names the field's value and how the start was made, and says what may help;
+    the hint is true here: after 100 periods from rest shooting finds an (unstable) period-1 orbit and the branch
+    starts. The command prints the same error and its options."""
+    cfg = BladePair(friction="bilinear")
+    with pytest.raises(ShootingError, match=r"no orbit of period 1 found at the start, mu = 1 \(after 20 periods "
+                                            r"from rest\): shooting stalled.*another transient"):
+        continuation(cfg, "mu", 1.0, 0.05, workers=1)
+    b = continuation(cfg, "mu", 1.0, 0.95, transient=100, max_points=3, workers=1)
+    assert b.params[0] == 1.0 and b.residuals[0] <= 1e-10 and not b.stable[0]
+    from blademodel.cli import main
+    from pathlib import Path
+    model = str(Path(__file__).resolve().parents[1] / "models" / "blade_pair_bilinear.yaml")
+    assert main(["continue", model, "--param", "mu", "--from", "1", "--to", "0.05"]) == 1
+    err = capsys.readouterr().err
+    assert "mu = 1 (after 20 periods from rest)" in err and "--transient" in err
 
 
 def test_the_coulomb_pair_crosses_a_kink_where_the_arclength_corrections_fail():

@@ -45,7 +45,8 @@ from ..numeric.blas_threads import blas_threads_for
 from .background import Locator, PendingPoint, resolve
 from .field_path import AffineFieldPath
 from .period_map import FlowError, PeriodMap, _copy, _key, worker_count
-from .shooting import _n_coordinates, _orbit_samples, _same, _scale_of_excursions, _state_scale, find_periodic_orbit
+from .shooting import (ShootingError, _n_coordinates, _orbit_samples, _same, _scale_of_excursions, _state_scale,
+                       find_periodic_orbit)
 
 
 @dataclass
@@ -390,8 +391,11 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
     P0 = fam.map_at(at)
     if resume is not None:
         mode = _last_mode(resume, P0.integrator)
-    first = find_periodic_orbit(None, periods=periods, guess=guess, mode=mode, transient=transient, tol=tol,
-                                rel_step=rel_step, integrator=P0.integrator, jacobian=jacobian, workers=workers)
+    try:
+        first = find_periodic_orbit(None, periods=periods, guess=guess, mode=mode, transient=transient, tol=tol,
+                                    rel_step=rel_step, integrator=P0.integrator, jacobian=jacobian, workers=workers)
+    except ShootingError as e:
+        raise _no_first_orbit(e, name, at, periods, transient, guess is not None) from None
     scale = first.scale
     n = scale.size
     ctx = _Context(fam, scale, span, tol, rel_step, max_corrections, grazing_tol)
@@ -605,6 +609,16 @@ def _assemble(ctx, pts, special, message: str, before: Branch | None, complete: 
 #: The fields of :class:`Branch` that hold one entry per point.
 _PER_POINT = ("params", "states", "multipliers", "stable", "amplitudes", "harmonics", "events", "residuals",
               "sections", "modes")
+
+
+def _no_first_orbit(e: ShootingError, name: str, at: float, periods: int, transient: int,
+                    guessed: bool) -> ShootingError:
+    """The shooting error at a branch's first point, saying where it was and what may find an orbit there."""
+    start = "from the guess" if guessed else f"after {transient} periods from rest"
+    return ShootingError(f"no orbit of period {periods} found at the start, {name} = {at:g} ({start}): {e}. "
+                         f"Where the residual stays large the start is far from such an orbit (the motion there "
+                         f"may be chaotic or of another period): another transient, a guess, another start or "
+                         f"another period may find one", e.history, e.state)
 
 
 def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, locate_tol, progress,
