@@ -141,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
         branch = _continued(args.out, config, run_settings, "branch", args.param, branch_of)
     except (ShootingError, FlowError) as e:
         print(f"error: {e}", file=sys.stderr)
-        if str(e).startswith("no orbit of period"):
+        if getattr(e, "at_start", False):
             print("hint: --transient N (periods from rest before shooting), another --from, or --period 2",
                   file=sys.stderr)
         return 1

@@ -615,10 +615,12 @@ def _no_first_orbit(e: ShootingError, name: str, at: float, periods: int, transi
                     guessed: bool) -> ShootingError:
     """The shooting error at a branch's first point, saying where it was and what may find an orbit there."""
     start = "from the guess" if guessed else f"after {transient} periods from rest"
-    return ShootingError(f"no orbit of period {periods} found at the start, {name} = {at:g} ({start}): {e}. "
-                         f"Where the residual stays large the start is far from such an orbit (the motion there "
-                         f"may be chaotic or of another period): another transient, a guess, another start or "
-                         f"another period may find one", e.history, e.state)
+    err = ShootingError(f"no orbit of period {periods} found at the start, {name} = {at:g} ({start}): {e}. "
+                        f"Where the residual stays large the start is far from such an orbit (the motion there "
+                        f"may be chaotic or of another period): another transient, a guess, another start or "
+                        f"another period may find one", e.history, e.state)
+    err.at_start = True   # for the command's hint at its options
+    return err
 
 
 def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, locate_tol, progress,
@@ -1116,17 +1118,18 @@ class _Context:
 
     def multipliers(self, A):
         """Floquet multipliers from the scaled Jacobian ``A``, largest modulus first."""
+        return _largest_first(np.linalg.eigvals(self._physical(A)))
+
+    def _physical(self, A):
+        """The monodromy matrix in physical units from the scaled Jacobian ``A``."""
         n = self.n
-        J = A[:, :n] * self.scale[:, None] / self.scale[None, :] + np.eye(n)
-        mu = np.linalg.eigvals(J)
-        return mu[np.argsort(-np.abs(mu), kind="stable")]
+        return A[:, :n] * self.scale[:, None] / self.scale[None, :] + np.eye(n)
 
     def point(self, X, mode, A):
         """The branch point's record from its scaled unknowns and Jacobian."""
         n = self.n
-        J = A[:, :n] * self.scale[:, None] / self.scale[None, :] + np.eye(n)   # in physical units
-        mu = np.linalg.eigvals(J)
-        mu = mu[np.argsort(-np.abs(mu), kind="stable")]   # as multipliers(A)
+        J = self._physical(A)   # kept in physical units: the scale changes from point to point
+        mu = _largest_first(np.linalg.eigvals(J))
         lam = X[-1] * self.span
         P = self.fam.map_at(lam)
         y = X[:-1] * self.scale
@@ -1381,6 +1384,11 @@ def _crossing_multiplier(mu, k: int) -> complex:
     """The multiplier whose count outside the unit circle changes between ``k`` and ``k + 1``: the ``k + 1``-th
     largest in modulus."""
     return mu[np.argsort(-np.abs(mu), kind="stable")[k]]
+
+
+def _largest_first(mu):
+    """Multipliers sorted by modulus, largest first (ties in their order)."""
+    return mu[np.argsort(-np.abs(mu), kind="stable")]
 
 
 def _unstable_count(mu) -> int:
