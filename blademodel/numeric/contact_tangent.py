@@ -197,11 +197,13 @@ class ContactTangent:
         if A is None:
             A = self._A[key] = self._build_flow_matrix(cm)
         if key not in self._checked:
-            if not self._flow_agrees(A, cm, y) and self._pattern is not None and key not in self._ungrouped:
+            agrees = self._flow_agrees(A, cm, y)
+            if not agrees and self._pattern is not None and key not in self._ungrouped:
                 # a pattern that missed an entry reads it into another column: take every column on its own
                 self._ungrouped.add(key)
                 A = self._A[key] = self._build_flow_matrix(cm)
-            if not self._flow_agrees(A, cm, y):
+                agrees = self._flow_agrees(A, cm, y)
+            if not agrees:
                 raise ContactTangentError(f"the flow in contact modes {cm.tolist()} is not affine in the state")
             self._checked.add(key)
         return A
