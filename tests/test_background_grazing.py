@@ -64,6 +64,25 @@ def test_resolve_waits_and_places_a_border_collision_at_the_grazing_in_its_brack
                                                      ("grazing", 1.01), ("fold", 5.0)]
 
 
+def test_a_location_that_finds_several_grazing_points_puts_each_in_its_place():
+    """A step across two grazing points: its placeholder becomes both, in order, where it stood; the border
+    collision of the step goes to the first that lies in its bracket, with that point's own bracket."""
+    def two(context):
+        return [{"param": 1.005, "state": np.array([1.005]), "mode": None},
+                {"param": 1.02, "state": np.array([1.02]), "mode": None, "bracket": (1.015, 1.02)}]
+
+    def finish(at):
+        return SpecialPoint(kind="grazing", param=at["param"], state=at["state"], multiplier=0.5, index=3,
+                            bracket=at.get("bracket"))
+
+    pending = PendingPoint(two, Locator(lambda: None, thread=False), finish, 3, bracket=(1.01, 1.03))
+    special = [_point("border-collision", 1.03, 3), pending, _point("fold", 5.0, 3)]
+    resolve(special)
+    assert [(q.kind, q.param, q.bracket) for q in special] == [
+        ("border-collision", 1.02, (1.015, 1.02)), ("grazing", 1.005, None), ("grazing", 1.02, (1.015, 1.02)),
+        ("fold", 5.0, None)]
+
+
 def test_without_a_thread_a_location_runs_when_its_step_is_taken_and_once():
     """The continuation's thread: ``start`` runs it, once; a point outside the border collision's bracket leaves the
     collision where it is."""
@@ -113,7 +132,7 @@ def test_a_location_whose_integration_fails_leaves_its_grazing_point_at_the_firs
     cfg = BladePair(friction="coulomb")
     fine = continuation(cfg, "omega", 312.3, 313.4, workers=1)
 
-    def failing(self, *args):
+    def failing(self, *args, **kwargs):
         raise FlowError("the integration stopped")
     monkeypatch.setattr(arclength._Context, "_locate_grazing", failing)
     failed = continuation(cfg, "omega", 312.3, 313.4, workers=1)
@@ -121,3 +140,5 @@ def test_a_location_whose_integration_fails_leaves_its_grazing_point_at_the_firs
     grazing = failed.points("grazing")
     assert len(grazing) == len(fine.points("grazing")) >= 3
     assert all(p.param == failed.params[p.index + 1] for p in grazing)
+    # and says it is somewhere in that step
+    assert all(p.bracket == tuple(sorted(failed.params[p.index:p.index + 2])) for p in grazing)

@@ -182,7 +182,8 @@ def run(args: argparse.Namespace) -> int:
            "message": branch.message, "integrations": branch.integrations, "replays": branch.replays,
            "values": branch.params.tolist(),
            "harmonic1": np.abs(branch.harmonics[:, i]).tolist(), "stable": branch.stable.tolist(),
-           "special": [{"kind": p.kind, "value": p.param, "multiplier": [p.multiplier.real, p.multiplier.imag]}
+           "special": [{"kind": p.kind, "value": p.param, "multiplier": [p.multiplier.real, p.multiplier.imag],
+                        "bracket": None if p.bracket is None else list(p.bracket)}
                        for p in branch.special], "state": state,
            "doubled": [None if b is None else {"periods": b.periods, "points": len(b.params), "message": b.message,
                                                "values": b.params.tolist(),
@@ -197,7 +198,8 @@ def run(args: argparse.Namespace) -> int:
           f"{branch.params[-1]:.6g} ({branch.message}); {int(np.sum(~branch.stable))} unstable; "
           f"{branch.integrations} integrations of the period map and {branch.replays} tangent replays")
     for p in branch.special:
-        print(f"  {p.kind} at {args.param} = {p.param:.8g} (multiplier {p.multiplier.real:.6g}"
+        within = "" if p.bracket is None else f", somewhere in [{p.bracket[0]:.8g}, {p.bracket[1]:.8g}]"
+        print(f"  {p.kind} at {args.param} = {p.param:.8g}{within} (multiplier {p.multiplier.real:.6g}"
               f"{p.multiplier.imag:+.6g}i)")
     for k, b in enumerate(doubled, 1):
         if b is None:

@@ -23,12 +23,14 @@ orbit, the field by the continuation range).
   (:mod:`.field_path`).
 * The step grows after easy corrections and is halved after hard or failed ones.
 
-Each point carries its Floquet multipliers and its orbit's number of events. A change in
-the number of multipliers outside the unit circle between two points is a bifurcation,
-located by regula falsi on the multiplier nearest the unit circle and classified by the
-multiplier that crossed: through ``+1`` a fold (the field's tangent component changes
-sign there too), through ``-1`` a period doubling, a complex pair a Neimark-Sacker
-bifurcation. A change in the number of events is a grazing, located by bisection.
+Each point carries its Floquet multipliers and its orbit's events (their signature: which
+transitions, how often). A change in the number of multipliers outside the unit circle
+between two points is a bifurcation, located by regula falsi on the multiplier nearest the
+unit circle and classified by the multiplier that crossed: through ``+1`` a fold (the
+field's tangent component changes sign there too), through ``-1`` a period doubling, a
+complex pair a Neimark-Sacker bifurcation. A change in the signature is a grazing, each
+one between the two points located by bisection (with the bracket that holds it where the
+bisection cannot close).
 """
 
 from __future__ import annotations
@@ -56,8 +58,8 @@ class SpecialPoint:
     Attributes
     ----------
     kind : str
-        ``"fold"``, ``"period-doubling"``, ``"neimark-sacker"`` or ``"grazing"`` (the number
-        of events per orbit changes: a guard of the orbit touches zero), or
+        ``"fold"``, ``"period-doubling"``, ``"neimark-sacker"`` or ``"grazing"`` (the orbit's
+        events change, which transitions or how many: a guard of the orbit touches zero), or
         ``"nonsmooth-fold"``: the branch turns back at a kink of the map (a grazing), its
         stability changing with no multiplier on the unit circle (one jumps across it);
         located only to within the last step across the kink; or ``"border-collision"``:
@@ -78,6 +80,14 @@ class SpecialPoint:
         The branch point after which it lies.
     mode : int or ndarray, optional
         The orbit's hybrid mode at the section (not kept in branch files).
+    bracket : tuple of float, optional
+        The field's values ``(lo, hi)`` between which the point lies, where its location
+        ended wider than ``locate_tol``: a border collision's bracket, or a grazing whose
+        bisection stopped because no orbit could be solved inside (the discrete flow sees
+        a phase that appears only once it spans a step, and just past a grazing
+        shooting then stalls: the Coulomb pair between 305.7811 and 305.7832 rad/s).
+        ``param`` is then an end of it (the first orbit found past the point). None where
+        located to ``locate_tol``.
     """
 
     kind: str
@@ -86,6 +96,7 @@ class SpecialPoint:
     multiplier: complex
     index: int
     mode: object = None
+    bracket: tuple | None = None
 
 
 @dataclass
@@ -904,7 +915,13 @@ class _Context:
         self.n = scale.size
         self.iterations = 0
         self.events = -1   # events of the orbit of the last residual's run
+        self._run = None   # that run (its signature: :attr:`signature`)
         self.why = ""
+
+    @property
+    def signature(self) -> bytes | None:
+        """The event signature (:meth:`~.period_map.MapRun.signature`) of the last residual's run."""
+        return None if self._run is None else self._run.signature()
 
     def correct_at_value(self, X, mode, jacobian=True):
         """Shooting at the field's value of the prediction ``X`` (no arclength condition); ``(None, ..)`` on failure.
@@ -960,6 +977,7 @@ class _Context:
         y = X[:-1] * self.scale
         Py, mode_end = P(y, _copy(mode))
         self.events = P.last_events
+        self._run = P.last_run
         return (Py - y) / self.scale, mode_end
 
     def jacobian(self, X, mode):
@@ -1142,7 +1160,7 @@ class _Context:
         S = P.integrator.steps_per_period
         return {"param": lam, "state": y, "sections": Y[:-1:S].copy(), "mu": mu, "stable": bool(np.max(np.abs(mu)) < 1.0), "amp": amp,
                 "h1": c, "unstable": _unstable_count(mu), "X": X.copy(), "mode": _copy(mode), "A": A, "Y": Y,
-                "events": r.events, "regular": True, "residual": residual,
+                "events": r.events, "signature": r.signature(), "regular": True, "residual": residual,
                 "magnitude": np.maximum(top, -bottom),   # each state's largest |value| on the orbit
                 "J": J, "dl": A[:, n] * self.scale / self.span}
 
@@ -1150,10 +1168,15 @@ class _Context:
         """The bifurcations between consecutive points ``a`` and ``b``, each located on the arclength.
 
         A change in the number of multipliers outside the unit circle (fold, period
-        doubling, Neimark-Sacker: :meth:`_locate_crossing`), and a change in the number of
-        events per orbit: a guard of the orbit touches zero there (a contact that grazes,
-        a slip that comes to rest: **grazing**, including the end of continuous sliding;
-        :meth:`_locate_grazing`).
+        doubling, Neimark-Sacker: :meth:`_locate_crossing`), and a change in the orbit's
+        events (which transitions it crosses, counted: its signature,
+        :meth:`~.period_map.MapRun.signature`): a guard of the orbit touches zero there (a
+        contact that grazes, a slip that comes to rest: **grazing**, including the end of
+        continuous sliding; every one between the two points, :meth:`_locate_grazings`).
+        Not the number of events alone: where one phase appears and another vanishes
+        within a step the number stays (the Coulomb pair from 314.02 to 314.21 rad/s at
+        ``ds_max = 0.02``: 15 events, a stick phase appearing at 314.137 and a short slip
+        before the contact opens vanishing at 314.182).
         """
         found = []
         bracket = None
@@ -1167,8 +1190,8 @@ class _Context:
                 kind = "neimark-sacker"
             else:
                 kind = "period-doubling" if mu.real < 0 else "fold"
-            found.append(_special(kind, best, index, mu))
-        if a["events"] != b["events"]:
+            found.append(_special(kind, best, index, mu, bracket))
+        if a["signature"] != b["signature"]:
             # the largest multiplier of the point before: at the grazing the map is not differentiable, and
             # difference quotients there straddle the kink (measured on 4- to 12-blade rings: 2e4 to 2.4e5 between
             # points at about 0.62)
@@ -1181,11 +1204,11 @@ class _Context:
             # rescaled later, their arrays never changed in place); a border collision whose bracket holds
             # the grazing is placed there (background.resolve): that is its kink
             args = (self.scale.copy(), dict(a), dict(b), Xa.copy(), Ta, _copy(mode), tol)
-            found.append(PendingPoint(lambda ctx: _locate_grazing_in(ctx, *args), self.locator, finish, index,
-                                      bracket, unlocated=args[2]))
+            found.append(PendingPoint(lambda ctx: _locate_grazings_in(ctx, *args), self.locator, finish, index,
+                                      bracket, unlocated=_unlocated(b, _field_bracket(Xa, b["X"], self.span))))
         return found
 
-    def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian, tol=None, at_value=False, newton=True):
+    def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian, tol=None, at_value=False, newton=True, step=None):
         """The branch point between two of its points ``X_lo``, ``X_hi``, a fraction ``theta`` of the way.
 
         Predicted on the chord between them and corrected with ``A`` as Broyden's first
@@ -1197,7 +1220,14 @@ class _Context:
         shooting at a fixed value never uses it (the branch may be all but vertical there:
         measured, ends ``2.7e-4`` apart in the scaled states and ``2e-7`` in the field).
         Around a fold the field does not move monotonically between the ends, so the
-        hyperplane is needed there. ``(X, mode, A)``, or ``X`` None.
+        hyperplane is needed there. A point corrected farther from either end than they
+        are from each other has left the bracket and is refused, unless (with ``step``,
+        the ends of the continuation step the bracket lies in) it was solved at a fixed
+        value and lies within that step: where the branch bows between the ends of a
+        narrow bracket its points there lie farther from them than they from each other
+        (the Coulomb pair between 224.32 and 224.41 rad/s, where the friction states rise
+        and fall again), and refusing them stopped the grazing's location with a bracket
+        0.09 rad/s wide. ``(X, mode, A)``, or ``X`` None.
         """
         width = np.linalg.norm(X_hi - X_lo)
         Xp = X_lo + theta * (X_hi - X_lo)
@@ -1209,7 +1239,7 @@ class _Context:
         Xm, mm, Am = self.correct(Xp, normal, mode, A, jacobian=jacobian, tol=tol, newton=newton)
         if Xm is None and not fixed and newton:
             Xm, mm, Am = self.correct_at_value(Xp, mode, jacobian=jacobian)
-        if Xm is not None and not _between(Xm, X_lo, X_hi):
+        if Xm is not None and not (_between(Xm, X_lo, X_hi) or (fixed and step is not None and _between(Xm, *step))):
             # corrected away from the bracket (a kink of the map, a fold of the branch across
             # the chord's hyperplane): the location stops at the bracket it has
             self.why = "a correction inside the bracket left it"
@@ -1290,10 +1320,11 @@ class _Context:
         bracket = (X_lo[-1] * self.span, X_hi[-1] * self.span) if jump else None
         return (self.point(*best) if isinstance(best, tuple) else best), bracket
 
-    def _locate_grazing(self, a, b, Xa, Ta, mode, locate_tol):
-        """The first point past a change of the number of events per orbit from ``a`` to ``b``, by bisection.
+    def _locate_grazing(self, a, b, Xa, Ta, mode, locate_tol, step=None):
+        """The first point past a change of the orbit's events (its signature) from ``a``'s, toward ``b``, by
+        bisection.
 
-        The count has no smooth test function, so the bracket is halved; each trial needs
+        The signature has no smooth test function, so the bracket is halved; each trial needs
         only its orbit's events (no Jacobian, no multipliers), and its prediction, halfway
         between the bracket's corrected ends, comes ever closer to the branch. Trials are
         solved at a fixed value of the field (where the ends' values differ). The bracket
@@ -1309,28 +1340,38 @@ class _Context:
         the trial (``a``'s up to the bracket's middle, ``b``'s past it); a trial that
         fails is tried beside. The located point is solved to ``tol``; it gets no
         Jacobian (the map has a kink there). Returns the located point's field value,
-        state and mode, or ``b`` where the bisection did not close.
+        state, mode, scaled unknowns ``X``, signature and ``bracket``: None where the
+        bisection closed, else the field's values across the last bracket, where no trial
+        inside it could be solved (:class:`SpecialPoint`); the first point past the change
+        found (``b`` if none was).
         """
         X_lo, X_hi = Xa, b["X"]
+        step = (Xa, b["X"]) if step is None else step
         best = None
         previous = np.inf
+        closed = False
         while True:
             width = float(np.linalg.norm(X_hi - X_lo))
             if width <= locate_tol or (abs(X_hi[-1] - X_lo[-1]) <= locate_tol and width > 0.75 * previous):
-                break   # closed, or closed in the field while the state across it no longer closes
+                closed = True   # closed, or closed in the field while the state across it no longer closes
+                break
             previous = width
             trial_tol = max(self.tol, TRIAL_ACCURACY * width)
             for theta in (0.5, 0.25, 0.75):   # a trial right at the grazing point can stall: one beside it
                 Xm, mm, _ = self._corrected(X_lo, X_hi, theta, mode, a["A"] if theta <= 0.5 else b["A"], False,
-                                            trial_tol, at_value=True, newton=False)
+                                            trial_tol, at_value=True, newton=False, step=step)
                 if Xm is not None:
                     break
+            if Xm is None:   # Broyden's method from the ends' Jacobians failed: Newton's, once
+                Xm, mm, _ = self._corrected(X_lo, X_hi, 0.5, mode, a["A"], False, trial_tol, at_value=True,
+                                            step=step)
             if Xm is None:
                 break
-            if self.events == a["events"]:
+            if self.signature == a["signature"]:
                 X_lo = Xm
             else:
                 X_hi, best = Xm, (Xm, mm)
+        bracket = None if closed else _field_bracket(X_lo, X_hi, self.span)
         if best is not None:
             Xb, mb = best
             r, _ = self.residual(Xb, mb)
@@ -1340,26 +1381,70 @@ class _Context:
             if Xb is not None:
                 # no Jacobian: the map is not differentiable here, and the special point takes the
                 # multiplier of the point before (detect)
-                return {"param": Xb[-1] * self.span, "state": Xb[:-1] * self.scale, "mode": _copy(mb)}
-        return b
+                return {"param": Xb[-1] * self.span, "state": Xb[:-1] * self.scale, "mode": _copy(mb), "X": Xb,
+                        "signature": self.signature, "bracket": bracket}
+            bracket = _field_bracket(X_lo, b["X"], self.span)
+        return b if bracket is None else _unlocated(b, bracket)
+
+    def _locate_grazings(self, a, b, Xa, Ta, mode, locate_tol, most=16):
+        """Every grazing point between consecutive points ``a`` and ``b`` (whose signatures differ), in order.
+
+        :meth:`_locate_grazing` finds the first past ``a``; where the orbit just past it
+        does not yet have ``b``'s signature, another grazing lies between it and ``b``,
+        located the same way from it (its trials start from ``a``'s Jacobian), and so on,
+        up to ``most``; two changes found within twice ``locate_tol`` of each other are
+        one grazing point (each is located only to ``locate_tol``: the Coulomb pair at
+        183.745228 rad/s, 15 events, then 16 over 2e-6 rad/s, then 13). A step long enough to cross several grazings (the Coulomb pair from
+        159.71 to 160.37 rad/s at ``ds_max = 0.3``: 12 events, then 16) reports each, as
+        shorter steps, which cross them one at a time, do. Where a location finds no orbit
+        past the change (or an integration in it fails) the list ends with ``b``'s orbit,
+        the first branch point past that grazing, with the bracket that holds it.
+        """
+        found = []
+        lo, X_lo = a, Xa
+        for _ in range(most):
+            try:
+                at = self._locate_grazing(lo, b, X_lo, Ta, mode, locate_tol, step=(Xa, b["X"]))
+            except (FlowError, np.linalg.LinAlgError, ValueError):
+                # an integration of the location failed: a grazing point's place is not worth the branch
+                at = _unlocated(b, _field_bracket(X_lo, b["X"], self.span))
+            at_b = at["X"] is b["X"]
+            if not at_b and at["signature"] == lo["signature"]:
+                break   # solved to tol, the point past the grazing fell back before it: that one is known
+            if not (found and not at_b and np.linalg.norm(at["X"] - X_lo) <= 2.0 * locate_tol):
+                found.append(at)   # (two changes closer than their locations' tolerance are one grazing point)
+            if at_b or at["signature"] == b["signature"] or not _between(at["X"], X_lo, b["X"]):
+                break
+            lo = {"X": at["X"], "A": a["A"], "signature": at["signature"]}
+            X_lo, mode = at["X"], at["mode"]
+        return found
 
 
-def _locate_grazing_in(ctx: _Context, scale, a, b, Xa, Ta, mode, tol):
-    """:meth:`_Context._locate_grazing` in ``ctx`` (the locator's), in the scale of the step that found it; ``b``
-    (the first point past it) where an integration of the location fails: a grazing point's place is not worth
-    the branch."""
+def _locate_grazings_in(ctx: _Context, scale, a, b, Xa, Ta, mode, tol):
+    """:meth:`_Context._locate_grazings` in ``ctx`` (the locator's), in the scale of the step that found them."""
     ctx.scale = scale
-    try:
-        return ctx._locate_grazing(a, b, Xa, Ta, mode, tol)
-    except (FlowError, np.linalg.LinAlgError, ValueError):
-        return b
+    return ctx._locate_grazings(a, b, Xa, Ta, mode, tol)
 
 
-def _special(kind: str, point: dict, index: int, multiplier=None) -> SpecialPoint:
-    """A special point at the branch point ``point`` (``multiplier``: by default its largest)."""
+def _field_bracket(X_lo, X_hi, span) -> tuple:
+    """The field's values at two scaled points, lower first."""
+    lo, hi = sorted((float(X_lo[-1] * span), float(X_hi[-1] * span)))
+    return lo, hi
+
+
+def _unlocated(b: dict, bracket) -> dict:
+    """A grazing point left at the branch point ``b`` past it, known to lie in the field's ``bracket``."""
+    return {"param": b["param"], "state": b["state"], "mode": b["mode"], "X": b["X"], "signature": b["signature"],
+            "bracket": bracket}
+
+
+def _special(kind: str, point: dict, index: int, multiplier=None, bracket=None) -> SpecialPoint:
+    """A special point at the branch point ``point`` (``multiplier``: by default its largest; ``bracket``: by
+    default the point's own, if it has one)."""
     mu = point["mu"][0] if multiplier is None else multiplier
+    bracket = point.get("bracket") if bracket is None else bracket
     return SpecialPoint(kind=kind, param=point["param"], state=point["state"], multiplier=complex(mu), index=index,
-                        mode=_copy(point["mode"]))
+                        mode=_copy(point["mode"]), bracket=None if bracket is None else tuple(map(float, bracket)))
 
 
 def _off_circle(p: SpecialPoint) -> bool:

@@ -1,6 +1,6 @@
 """Grazing points located on period maps of their own, in a thread beside the continuation where one is free.
 
-Locating a grazing point (bisection on the number of events per orbit) decides nothing
+Locating a grazing point (bisection on the orbit's events) decides nothing
 the continuation goes on with: the branch's points are the same whether and however
 finely grazing points are located (``tests/test_grazing_tolerance.py``). So the location
 runs on period maps of its own (a period map keeps its last run and its integrator's
@@ -65,7 +65,8 @@ class PendingPoint:
     Parameters
     ----------
     task : callable
-        ``task(context)``: the located point (a dict with ``param``, ``state``, ``mode``).
+        ``task(context)``: the located point (a dict with ``param``, ``state``, ``mode``), or a
+        list of them (several grazing points within one step), in order.
     locator : Locator
     finish : callable
         ``finish(located)``: the :class:`~blademodel.orbits.arclength.SpecialPoint`.
@@ -102,16 +103,19 @@ class PendingPoint:
 
 
 def resolve(special: list) -> None:
-    """Replace every :class:`PendingPoint` in ``special`` by its special point, in place, waiting for each.
+    """Replace every :class:`PendingPoint` in ``special`` by its special points, in place, waiting for each.
 
     A border collision (or the nonsmooth fold it became) of the same step whose bracket
-    holds the located point is placed at it: the kink of the map is that grazing. A
-    location that a Ctrl-C cut short (or one pressed while waiting) leaves its grazing
-    point at the first branch point past it, and the rest are not waited for.
+    holds a located point is placed at the first such: the kink of the map is that
+    grazing. A location that a Ctrl-C cut short (or one pressed while waiting) leaves its
+    grazing point at the first branch point past it, and the rest are not waited for.
     """
     hurry = False
-    for i, q in enumerate(special):
+    i = 0
+    while i < len(special):
+        q = special[i]
         if not isinstance(q, PendingPoint):
+            i += 1
             continue
         located = None
         if not hurry or q.done():
@@ -119,11 +123,15 @@ def resolve(special: list) -> None:
                 located = q.located()
             except KeyboardInterrupt:
                 hurry = True
-        point = q.finish(q.unlocated if located is None else located)
-        special[i] = point
-        if q.bracket is None or not min(q.bracket) <= point.param <= max(q.bracket):
+        located = [q.unlocated] if located is None else located if isinstance(located, list) else [located]
+        points = [q.finish(at) for at in located]
+        special[i:i + 1] = points
+        i += len(points)
+        inside = [p for p in points if q.bracket is not None and min(q.bracket) <= p.param <= max(q.bracket)]
+        if not inside:
             continue
+        point = inside[0]
         for k, r in enumerate(special):
-            if r is not point and not isinstance(r, PendingPoint) and r.index == q.index \
+            if all(r is not p for p in points) and not isinstance(r, PendingPoint) and r.index == q.index \
                     and r.kind in ("border-collision", "nonsmooth-fold"):
-                special[k] = replace(r, param=point.param, state=point.state, mode=point.mode)
+                special[k] = replace(r, param=point.param, state=point.state, mode=point.mode, bracket=point.bracket)

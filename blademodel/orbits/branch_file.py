@@ -115,7 +115,9 @@ def save_branch(branch: Branch, path, config=None, run: dict | None = None) -> N
         for name, data in (("special_" + branch.field, [p.param for p in branch.special]),
                            ("special_multiplier_re", [p.multiplier.real for p in branch.special]),
                            ("special_multiplier_im", [p.multiplier.imag for p in branch.special]),
-                           ("special_index", [p.index for p in branch.special])):
+                           ("special_index", [p.index for p in branch.special]),
+                           ("special_bracket_lo", [np.nan if p.bracket is None else p.bracket[0] for p in branch.special]),
+                           ("special_bracket_hi", [np.nan if p.bracket is None else p.bracket[1] for p in branch.special])):
             v = ds.createVariable(name, "f8" if "index" not in name else "i8", ("special",))
             v[:] = np.asarray(data)
         ds["special_kind"].long_name = "kind of special point: fold, period-doubling, neimark-sacker, grazing, nonsmooth-fold, border-collision"
@@ -123,6 +125,10 @@ def save_branch(branch: Branch, path, config=None, run: dict | None = None) -> N
         ds["special_multiplier_re"].long_name = "real part of the critical multiplier"
         ds["special_multiplier_im"].long_name = "imaginary part of the critical multiplier"
         ds["special_index"].long_name = "point of the branch after which the special point lies"
+        for end in ("lo", "hi"):
+            ds["special_bracket_" + end].long_name = (f"{branch.field} at the {'lower' if end == 'lo' else 'upper'} "
+                                                      "end of the interval known to hold the special point, where "
+                                                      "its location ended wider than locate_tol (NaN: located)")
         ds["multiplier_im"].long_name = "Floquet multipliers, largest modulus first (imaginary parts)"
         ds["multiplier_re"].long_name = "Floquet multipliers, largest modulus first (real parts)"
         for name, var in ds.variables.items():
@@ -149,7 +155,8 @@ def load_branch(path) -> Branch:
         special = [SpecialPoint(kind=str(ds["special_kind"][i]), param=float(ds["special_" + name][i]),
                                 state=np.empty(0),
                                 multiplier=complex(ds["special_multiplier_re"][i], ds["special_multiplier_im"][i]),
-                                index=int(ds["special_index"][i])) for i in range(len(ds.dimensions["special"]))]
+                                index=int(ds["special_index"][i]), bracket=_bracket(ds, i))
+                   for i in range(len(ds.dimensions["special"]))]
         return Branch(field=name, periods=int(ds.periods), params=ds[name][:].data.copy(),
                       states=ds["section_state"][:].data.copy(), multipliers=mu,
                       stable=ds["stable"][:].data.astype(bool), amplitudes=ds["amplitude"][:].data.copy(),
@@ -163,6 +170,14 @@ def load_branch(path) -> Branch:
                       modes=ds["section_mode"][:].data.astype(np.int64) if "section_mode" in ds.variables
                       else np.zeros((0, 1), dtype=np.int64),
                       complete=bool(getattr(ds, "complete", 1)))
+
+
+def _bracket(ds, i: int) -> tuple | None:
+    """The ``i``-th special point's bracket in a branch file (None where located, or in a file without brackets)."""
+    if "special_bracket_lo" not in ds.variables:
+        return None
+    lo, hi = float(ds["special_bracket_lo"][i]), float(ds["special_bracket_hi"][i])
+    return None if np.isnan(lo) else (lo, hi)
 
 
 def branch_origin(path) -> tuple[dict | None, dict | None]:

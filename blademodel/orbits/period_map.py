@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -62,6 +62,22 @@ class MapRun:
     n_log: int
     events: int
     modes: np.ndarray | None = None
+    _signature: bytes | None = field(default=None, repr=False)
+
+    def signature(self) -> bytes:
+        """The run's events as a multiset: each transition (its guard, from and to modes, and on the
+        per-contact kernel its contact) as often as it occurred, in no order.
+
+        Two orbits of a branch with equal signatures cross the same events; one whose
+        signature differs has crossed a grazing (a phase that appears or vanishes adds or
+        removes transitions), even where the number of events is the same (one phase that
+        appears and another that vanishes). Where a switching time passes the section the
+        sequence only turns round, and the multiset stays.
+        """
+        if self._signature is None:
+            cols = np.stack([np.asarray(c[:self.n_log]) for c in self.log[1:]], axis=1)
+            self._signature = cols[np.lexsort(cols.T[::-1])].tobytes()
+        return self._signature
 
 
 class PeriodMap:
@@ -118,6 +134,7 @@ class PeriodMap:
         self.evaluations = 0   # integrations of the map (each over ``periods`` excitation periods)
         self.replays = 0       # tangent replays of a kept run (no integration)
         self.last_events = -1
+        self.last_run: MapRun | None = None   # the last run made or returned again by run()
         self.method = jacobian
         self.exact = jacobian in ("auto", "tangent") and kernel in ("product", "contact")
         self._contact_tangent = None
@@ -138,6 +155,7 @@ class PeriodMap:
         y = np.asarray(y, dtype=float)
         key = (y[:self.n].tobytes(), _key(mode))
         if self._last is not None and self._last[0] == key:
+            self.last_run = self._last[1]
             return self._last[1]
         full = np.zeros(ig.n_state)
         full[:self.n] = y[:self.n]
@@ -162,6 +180,7 @@ class PeriodMap:
                    modes=rec[2] if len(rec) > 2 else None)
         self.last_events = r.events
         self._last = (key, r)
+        self.last_run = r
         return r
 
     def derivatives(self, y, mode, dp=None, dperiod: float = 0.0):

@@ -1,0 +1,88 @@
+"""Grazing points found by a continuation do not depend on how many a step crosses.
+
+A grazing changes which transitions the orbit crosses; the continuation compares the
+orbits' event signatures (the multiset of transitions), not their numbers of events, and
+locates every grazing between two points. The reference is the same branch at steps short
+enough to cross the grazings one at a time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from blademodel.orbits import continuation
+from blademodel.zheng2022 import BladePair
+
+
+def _grazings(start, stop, ds_max):
+    b = continuation(BladePair(friction="coulomb"), "omega", start, stop, ds_max=ds_max, workers=1)
+    assert b.message.startswith("reached")
+    inside = [p for p in b.points("grazing") if min(start, stop) <= p.param <= max(start, stop)]
+    return b, np.array(sorted(p.param for p in inside)), [p.index for p in inside]
+
+
+def _same_points(long, short, tol):
+    assert long.size == short.size, (long, short)
+    np.testing.assert_allclose(long, short, rtol=0, atol=tol)
+
+
+@pytest.mark.parametrize("ds_max", [0.3, 1.0])
+def test_a_step_across_two_grazings_reports_both(ds_max):
+    """The Coulomb pair from 157 to 161 rad/s: one long step goes from an orbit of 12 events to one of 16,
+    across the grazings at 160.2212 and 160.3522 rad/s; both are reported, where the shorter steps find them."""
+    long, at_long, index = _grazings(157.0, 161.0, ds_max)
+    _, at_short, index_short = _grazings(157.0, 161.0, 0.01)
+    assert len(set(index_short)) == len(index_short)              # the short steps cross one at a time
+    i = next(i for i in index if index.count(i) == 2)               # the long run has a step across two
+    assert long.events[i + 1] - long.events[i] == 4
+    _same_points(at_long, at_short, 1e-6 * 161.0)
+
+
+def test_a_step_whose_number_of_events_stays_reports_its_grazings():
+    """The Coulomb pair from 313.5 to 315 rad/s: a stick phase appears at 314.1365 rad/s (15 to 16 events) and a
+    short slip before the contact opens vanishes at 314.1818 (16 to 15). A long step across both has 15 events
+    at either end, so that comparing numbers of events sees nothing; both are reported."""
+    long, at_long, index = _grazings(313.5, 315.0, 0.3)
+    _, at_short, _ = _grazings(313.5, 315.0, 0.01)
+    assert at_short.size == 2
+    i = index[0]
+    assert index == [i, i] and long.events[i] == long.events[i + 1]
+    _same_points(at_long, at_short, 1e-6 * 315.0)
+
+
+def test_a_grazing_whose_bisection_cannot_close_reports_the_bracket_that_holds_it(tmp_path):
+    """The Coulomb pair near 305.78 rad/s: a stick phase appears (13 events, then 15), and just past it shooting
+    stalls (the discrete flow sees the phase only once it spans a step). The bisection stops there, and the
+    grazing point says between which values of the field it lies. Shooting at fixed values across that bracket,
+    each from the last orbit, finds the change inside it; the bracket survives the branch file."""
+    from blademodel.config import apply_overrides
+    from blademodel.orbits import ShootingError, find_periodic_orbit
+    from blademodel.orbits.branch_file import load_branch, save_branch
+    from blademodel.orbits.period_map import PeriodMap
+    from blademodel.numeric.kernels import make_integrator
+
+    cfg = BladePair(friction="coulomb")
+    b = continuation(cfg, "omega", 305.6, 306.0, ds_max=0.05, workers=1)
+    (g,) = b.points("grazing")
+    lo, hi = g.bracket
+    assert lo < hi <= b.params[g.index + 1] and b.params[g.index] <= lo and g.param in (lo, hi)
+
+    before, after = b.events[g.index], b.events[g.index + 1]
+    y, mode, seen = b.states[g.index], int(b.modes[g.index][0]), {}
+    for w in np.linspace(b.params[g.index], hi, 61):   # from the branch point before the grazing
+        model = apply_overrides(cfg, {"omega": float(w)}).build()
+        try:
+            orbit = find_periodic_orbit(model, guess=y, mode=mode, transient=0)
+        except ShootingError:   # the discrete flow's gap
+            continue
+        y, mode = orbit.state, orbit.mode
+        seen[float(w)] = PeriodMap(make_integrator(model)).run(y, mode).events
+    assert set(seen.values()) == {before, after} and before != after
+    last_before = max(w for w, e in seen.items() if e == before)
+    first_after = min(w for w, e in seen.items() if e == after)
+    assert last_before < first_after and lo <= first_after and last_before <= hi   # the change is in the bracket
+
+    path = tmp_path / "branch.nc"
+    save_branch(b, path, cfg)
+    assert [p.bracket for p in load_branch(path).special] == [p.bracket for p in b.special]
