@@ -170,3 +170,16 @@ def test_a_killed_continue_command_keeps_its_points_and_resumes(tmp_path, capsys
     assert main(_command(out, "--max-points", "5")) == 0
     assert "resuming" not in capsys.readouterr().err
     assert len(load_branch(out).params) == 5
+
+
+def test_a_branch_point_with_its_mode_row_starts_a_branch_of_its_own():
+    """A branch point's section state and its row of ``Branch.modes`` (one entry on the product-mode kernel) start
+    a continuation where it stands: its first orbit is that point's (it failed: an array was no mode number)."""
+    b = continuation(BladePair(friction="coulomb"), "omega", 300.0, 301.0, workers=1)
+    i = len(b.params) // 2
+    again = continuation(BladePair(friction="coulomb"), "omega", float(b.params[i]), 301.0, guess=b.states[i],
+                         mode=b.modes[i], transient=0, workers=1)
+    np.testing.assert_allclose(again.states[0], b.states[i], rtol=0, atol=1e-9 * np.abs(b.states).max())
+    with pytest.raises(ValueError, match=r"mode = array\(\[0, 1\]\)"):
+        continuation(BladePair(friction="coulomb"), "omega", 300.0, 301.0, guess=b.states[i], mode=np.array([0, 1]),
+                     transient=0, workers=1)

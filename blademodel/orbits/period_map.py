@@ -391,6 +391,25 @@ def _key(mode):
     return tuple(np.atleast_1d(mode).tolist())
 
 
+def kernel_mode(integrator, mode):
+    """``mode`` as ``integrator`` takes it: a number on the product-mode kernel (also from a one-entry row of
+    :attr:`~blademodel.orbits.arclength.Branch.modes`), an array of each contact's mode on the per-contact
+    kernel; ``None`` stays None.
+
+    Raises
+    ------
+    ValueError
+        For a row of more than one entry on the product-mode kernel (it names the value).
+    """
+    if mode is None or getattr(integrator, "kernel", "") == "contact" or isinstance(mode, (int, np.integer)):
+        return mode
+    row = np.atleast_1d(np.asarray(mode))
+    if row.size != 1 or not np.issubdtype(row.dtype, np.integer):
+        raise ValueError(f"mode = {mode!r}: the product-mode kernel takes one mode number (or a row of Branch.modes "
+                         f"with one entry)")
+    return int(row[0])
+
+
 def _copy(mode):
     """A mode the kernel may update in place (the per-contact kernel's is an array)."""
     return mode.copy() if isinstance(mode, np.ndarray) else mode

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .period_map import FlowError, PeriodMap, _copy
+from .period_map import FlowError, PeriodMap, _copy, kernel_mode
 
 
 class ShootingError(RuntimeError):
@@ -131,7 +131,8 @@ def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, trans
     guess : array_like or dict, optional
         State at ``t = 0``; by default the state after ``transient`` periods from rest.
     mode : int or array, optional
-        The guess's hybrid mode; by default the one its state belongs to.
+        The guess's hybrid mode (a row of :attr:`~blademodel.orbits.arclength.Branch.modes`
+        will do); by default the one its state belongs to.
     transient : int
         Periods integrated from rest (or from ``guess``) before the first step.
     tol : float
@@ -172,6 +173,7 @@ def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, trans
     P = PeriodMap(ig, periods, jacobian, workers)
     n = P.n
     y_full = ig.initial_state(guess)
+    mode = kernel_mode(ig, mode)
     if mode is None:
         mode = ig.mode_of(y_full)
     mode = _copy(mode)
