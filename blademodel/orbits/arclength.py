@@ -710,7 +710,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         if arm:   # the turn is at the unstable arm's last orbit, to within the last step tried past it
             found = [_special("nonsmooth-fold", pts[-1], len(pts) - 1)]
         else:
-            found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol)
+            found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol, before=pts[-2] if len(pts) > 1 else None)
         off_circle = any(_at_kink(q) for q in found)
         retry = any(_off_circle(q) for q in found)
         T_away = None   # past a kink the new point lies on another arm: onward on it is away from the kink
@@ -1166,7 +1166,7 @@ class _Context:
                 "magnitude": np.maximum(top, -bottom),   # each state's largest |value| on the orbit
                 "J": J, "dl": A[:, n] * self.scale / self.span}
 
-    def detect(self, a, b, Xa, Ta, mode, index, locate_tol):
+    def detect(self, a, b, Xa, Ta, mode, index, locate_tol, before=None):
         """The bifurcations between consecutive points ``a`` and ``b``, each located on the arclength.
 
         A change in the number of multipliers outside the unit circle (fold, period
@@ -1179,20 +1179,32 @@ class _Context:
         within a step the number stays (the Coulomb pair from 314.02 to 314.21 rad/s at
         ``ds_max = 0.02``: 15 events, a stick phase appearing at 314.137 and a short slip
         before the contact opens vanishing at 314.182).
+
+        Where ``a`` and ``b`` have the same count, a multiplier may still have crossed the
+        circle and come back within the step (:meth:`_window`, from ``before``, the point
+        before ``a``); both crossings are then located.
         """
         found = []
         bracket = None
-        if a["unstable"] != b["unstable"]:
-            best, bracket = self._locate_crossing(a, b, Xa, Ta, mode, locate_tol)
+        pairs = [(a, b, Xa)]
+        if before is not None and a["unstable"] == b["unstable"]:
+            m = self._window(before, a, b, Xa, mode)
+            if m is not None:
+                pairs = [(a, m, Xa), (m, b, m["X"])]
+        for p, q, Xp in pairs:
+            if p["unstable"] == q["unstable"]:
+                continue
+            best, jump = self._locate_crossing(p, q, Xp, Ta, mode, locate_tol)
             mu = best["mu"][np.argmin(np.abs(np.abs(best["mu"]) - 1.0))]
-            if bracket is not None:
+            if jump is not None:
                 kind = "border-collision"   # with the multiplier that jumped across the circle
-                mu = _crossing_multiplier(best["mu"], min(a["unstable"], b["unstable"]))
+                mu = _crossing_multiplier(best["mu"], min(p["unstable"], q["unstable"]))
+                bracket = jump
             elif abs(mu.imag) > 1e-6 * abs(mu):
                 kind = "neimark-sacker"
             else:
                 kind = "period-doubling" if mu.real < 0 else "fold"
-            found.append(_special(kind, best, index, mu, bracket))
+            found.append(_special(kind, best, index, mu, jump))
         if a["signature"] != b["signature"]:
             # the largest multiplier of the point before: at the grazing the map is not differentiable, and
             # difference quotients there straddle the kink (measured on 4- to 12-blade rings: 2e4 to 2.4e5 between
@@ -1209,6 +1221,44 @@ class _Context:
             found.append(PendingPoint(lambda ctx: _locate_grazings_in(ctx, *args), self.locator, finish, index,
                                       bracket, unlocated=_unlocated(b, _field_bracket(Xa, b["X"], self.span))))
         return found
+
+    def _window(self, before, a, b, Xa, mode):
+        """A point between ``a`` and ``b`` (which have the same number of multipliers outside the unit circle)
+        where that number differs, or None.
+
+        A step can jump a window of stability or instability whose two ends it does not
+        resolve (the bilinear pair at ``ds_max = 0.2``: unstable at 416.73 and 417.98 rad/s,
+        its period-doubling multiplier 1.0003 and 1.0099 in modulus there, and stable between
+        the period doublings at 416.73 and 417.80). The moduli of the multipliers on either
+        side of the circle (the last outside and the first inside, largest first) are
+        interpolated by the parabola through ``before``, ``a`` and ``b`` in their arclength;
+        where it crosses the circle and comes back between ``a`` and ``b``, the point at its
+        extremum is corrected (on the hyperplane normal to the chord), and returned where its
+        count differs. One correction where the parabola says so, none elsewhere.
+        """
+        u = a["unstable"]
+        Xb = b["X"]
+        X0 = np.append(before["state"] / self.scale, before["param"] / self.span)
+        d0, d1 = float(np.linalg.norm(Xa - X0)), float(np.linalg.norm(Xb - Xa))
+        if not (d0 > 0 and d1 > 0):
+            return None
+        s = np.array([-d0, 0.0, d1])
+        for j in (u - 1, u):
+            if j < 0 or j >= a["mu"].size:
+                continue
+            g = np.array([abs(q["mu"][j]) - 1.0 for q in (before, a, b)])
+            if not (np.all(g > 0) or np.all(g < 0)):
+                continue
+            c2, c1, c0 = np.polyfit(s, g, 2)
+            if c2 == 0.0:
+                continue
+            at = -c1 / (2.0 * c2)
+            if not 0.0 < at < d1 or np.sign(np.polyval([c2, c1, c0], at)) == np.sign(g[1]):
+                continue
+            Xm, mm, Am = self._corrected(Xa, Xb, at / d1, mode, a["A"] if at <= 0.5 * d1 else b["A"], True)
+            if Xm is not None and _unstable_count(self.multipliers(Am)) != u:
+                return self.point(Xm, mm, Am)
+        return None
 
     def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian, tol=None, at_value=False, newton=True, step=None):
         """The branch point between two of its points ``X_lo``, ``X_hi``, a fraction ``theta`` of the way.
