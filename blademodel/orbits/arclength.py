@@ -1275,11 +1275,11 @@ class _Context:
         hyperplane is needed there. A point corrected farther from either end than they
         are from each other has left the bracket and is refused, unless (with ``step``,
         the ends of the continuation step the bracket lies in) it was solved at a fixed
-        value and lies within that step: where the branch bows between the ends of a
-        narrow bracket its points there lie farther from them than they from each other
-        (the Coulomb pair between 224.32 and 224.41 rad/s, where the friction states rise
-        and fall again), and refusing them stopped the grazing's location with a bracket
-        0.09 rad/s wide. ``(X, mode, A)``, or ``X`` None.
+        value and lies within the step's length of one of its ends: where the branch bows
+        between the ends of a bracket its points there lie farther from them than they
+        from each other (the Coulomb pair between 224.23 and 224.60 rad/s, where the
+        friction states rise and fall again), and refusing them stopped the grazing's
+        location with a bracket 0.09 to 0.28 rad/s wide. ``(X, mode, A)``, or ``X`` None.
         """
         width = np.linalg.norm(X_hi - X_lo)
         Xp = X_lo + theta * (X_hi - X_lo)
@@ -1291,7 +1291,7 @@ class _Context:
         Xm, mm, Am = self.correct(Xp, normal, mode, A, jacobian=jacobian, tol=tol, newton=newton)
         if Xm is None and not fixed and newton:
             Xm, mm, Am = self.correct_at_value(Xp, mode, jacobian=jacobian)
-        if Xm is not None and not (_between(Xm, X_lo, X_hi) or (fixed and step is not None and _between(Xm, *step))):
+        if Xm is not None and not (_between(Xm, X_lo, X_hi) or (fixed and step is not None and _near(Xm, *step))):
             # corrected away from the bracket (a kink of the map, a fold of the branch across
             # the chord's hyperplane): the location stops at the bracket it has
             self.why = "a correction inside the bracket left it"
@@ -1405,6 +1405,7 @@ class _Context:
         previous = np.inf
         closed = False
         reach = 2.0 * locate_tol if near else np.inf   # the first trials' distance from X_lo, growing fourfold
+        X_before = None   # the lower end before X_lo: their secant predicts where the chord to X_hi does not
         while True:
             width = float(np.linalg.norm(X_hi - X_lo))
             if width <= locate_tol or (abs(X_hi[-1] - X_lo[-1]) <= locate_tol and width > 0.75 * previous):
@@ -1415,8 +1416,10 @@ class _Context:
             if reach < 0.5 * width:
                 Xm, mm, _ = self._corrected(X_lo, X_hi, reach / width, mode, a["A"], False, trial_tol, at_value=True,
                                             newton=False, step=step)
+                if Xm is None:
+                    Xm, mm = self._along_secant(X_before, X_lo, X_hi, reach / width, mode, a["A"], trial_tol, step)
                 if Xm is not None and self.signature == a["signature"]:
-                    X_lo, reach = Xm, 4.0 * reach
+                    X_before, X_lo, reach = X_lo, Xm, 4.0 * reach
                     continue
                 reach = np.inf
                 if Xm is not None:
@@ -1427,13 +1430,15 @@ class _Context:
                                             trial_tol, at_value=True, newton=False, step=step)
                 if Xm is not None:
                     break
+            if Xm is None:
+                Xm, mm = self._along_secant(X_before, X_lo, X_hi, 0.5, mode, a["A"], trial_tol, step)
             if Xm is None:   # Broyden's method from the ends' Jacobians failed: Newton's, once
                 Xm, mm, _ = self._corrected(X_lo, X_hi, 0.5, mode, a["A"], False, trial_tol, at_value=True,
                                             step=step)
             if Xm is None:
                 break
             if self.signature == a["signature"]:
-                X_lo = Xm
+                X_before, X_lo = X_lo, Xm
             else:
                 X_hi, best = Xm, (Xm, mm, self.signature)
         bracket = None if closed else _field_bracket(X_lo, X_hi, self.span)
@@ -1458,6 +1463,28 @@ class _Context:
             return {"param": Xb[-1] * self.span, "state": Xb[:-1] * self.scale, "mode": _copy(mb), "X": Xb,
                     "signature": signature, "bracket": bracket}
         return b if bracket is None else _unlocated(b, bracket)
+
+    def _along_secant(self, X_before, X_lo, X_hi, theta, mode, A, tol, step):
+        """A trial a fraction ``theta`` of the way from ``X_lo`` to ``X_hi`` in the field, its state predicted on the
+        secant through ``X_before`` and ``X_lo`` (not on the chord to ``X_hi``) and solved at that value of the field
+        by Broyden's method from ``A``: ``(X, mode)``, or ``(None, mode)``.
+
+        Where the branch bends between a bracket's ends the chord's prediction lies far from
+        it and the corrections stall (the Coulomb pair from 201.14 to 202.17 rad/s, a
+        second grazing point's bracket: residuals of 0.016 to 0.048 at the chord's trials,
+        Newton's method 1.2e-4), while the lower end's last two points lie on the branch.
+        """
+        if X_before is None or X_lo[-1] == X_before[-1]:
+            return None, mode
+        lam = X_lo[-1] + theta * (X_hi[-1] - X_lo[-1])
+        Xp = X_lo + (lam - X_lo[-1]) / (X_lo[-1] - X_before[-1]) * (X_lo - X_before)
+        Xp[-1] = lam
+        normal = np.zeros_like(Xp)
+        normal[-1] = 1.0
+        Xm, mm, _ = self.correct(Xp, normal, mode, A, jacobian=False, tol=tol, newton=False)
+        if Xm is None or not _near(Xm, *step):
+            return None, mm
+        return Xm, mm
 
     def _locate_grazings(self, a, b, Xa, Ta, mode, locate_tol, most=16):
         """Every grazing point between consecutive points ``a`` and ``b`` (whose signatures differ), in order.
@@ -1541,6 +1568,12 @@ def _between(X, X_lo, X_hi) -> bool:
     width = np.linalg.norm(X_hi - X_lo)
     d_lo, d_hi = np.linalg.norm(X - X_lo), np.linalg.norm(X - X_hi)
     return bool(min(d_lo, d_hi) > 1e-6 * width and max(d_lo, d_hi) < width)
+
+
+def _near(X, X_a, X_b) -> bool:
+    """Whether ``X`` lies within a step's length of either end of the step from ``X_a`` to ``X_b``."""
+    reach = np.linalg.norm(X_b - X_a)
+    return bool(min(np.linalg.norm(X - X_a), np.linalg.norm(X - X_b)) <= reach)
 
 
 def _crossing_multiplier(mu, k: int) -> complex:
