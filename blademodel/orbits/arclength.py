@@ -921,7 +921,7 @@ class _Context:
         self.why = ""
 
     @property
-    def signature(self) -> bytes | None:
+    def signature(self) -> tuple | None:
         """The event signature (:meth:`~.period_map.MapRun.signature`) of the last residual's run."""
         return None if self._run is None else self._run.signature()
 
@@ -1238,22 +1238,25 @@ class _Context:
         """
         u = a["unstable"]
         Xb = b["X"]
-        X0 = np.append(before["state"] / self.scale, before["param"] / self.span)
-        d0, d1 = float(np.linalg.norm(Xa - X0)), float(np.linalg.norm(Xb - Xa))
-        if not (d0 > 0 and d1 > 0):
-            return None
-        s = np.array([-d0, 0.0, d1])
+        d0 = d1 = None
         for j in (u - 1, u):
             if j < 0 or j >= a["mu"].size:
                 continue
-            g = np.array([abs(q["mu"][j]) - 1.0 for q in (before, a, b)])
-            if not (np.all(g > 0) or np.all(g < 0)):
+            g0, g1, g2 = (float(abs(q["mu"][j])) - 1.0 for q in (before, a, b))
+            if not (min(g0, g1, g2) > 0.0 or max(g0, g1, g2) < 0.0):
                 continue
-            c2, c1, c0 = np.polyfit(s, g, 2)
+            if d0 is None:   # (in floats: this runs at every step, numpy's polyfit cost a tenth of the branch)
+                X0 = np.append(before["state"] / self.scale, before["param"] / self.span)
+                d0, d1 = float(np.linalg.norm(Xa - X0)), float(np.linalg.norm(Xb - Xa))
+            if not (d0 > 0.0 and d1 > 0.0):
+                return None
+            # the parabola through (-d0, g0), (0, g1), (d1, g2) in Newton's form, and its extremum
+            f01, f12 = (g1 - g0) / d0, (g2 - g1) / d1
+            c2 = (f12 - f01) / (d0 + d1)
             if c2 == 0.0:
                 continue
-            at = -c1 / (2.0 * c2)
-            if not 0.0 < at < d1 or np.sign(np.polyval([c2, c1, c0], at)) == np.sign(g[1]):
+            at = 0.5 * (-f01 / c2 - d0)
+            if not 0.0 < at < d1 or (g0 + f01 * (at + d0) + c2 * (at + d0) * at > 0.0) == (g1 > 0.0):
                 continue
             Xm, mm, Am = self._corrected(Xa, Xb, at / d1, mode, a["A"] if at <= 0.5 * d1 else b["A"], True)
             if Xm is not None and _unstable_count(self.multipliers(Am)) != u:
