@@ -100,6 +100,7 @@ def test_the_continue_command_says_where_a_grazing_point_is_only_bracketed(capsy
     assert main(args + ["--json"]) == 0
     (g,) = [p for p in json.loads(capsys.readouterr().out)["special"] if p["kind"] == "grazing"]
     lo, hi = g["bracket"]
-    assert lo <= g["value"] <= hi and lo < 305.78125 and 305.78325 <= hi   # shooting: no orbit at 305.78125, 15 events at 305.78325
+    # shooting at fixed values finds no orbit at 305.78125 and one of 15 events at 305.78325
+    assert lo <= g["value"] <= hi and lo < 305.78125 and 305.78325 <= hi
     assert main(args) == 0
     assert f"somewhere in [{lo:.8g}, {hi:.8g}]" in capsys.readouterr().out

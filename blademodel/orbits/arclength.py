@@ -710,7 +710,8 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         if arm:   # the turn is at the unstable arm's last orbit, to within the last step tried past it
             found = [_special("nonsmooth-fold", pts[-1], len(pts) - 1)]
         else:
-            found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol, before=pts[-2] if len(pts) > 1 else None)
+            found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol,
+                               before=pts[-2] if len(pts) > 1 else None)
         off_circle = any(_at_kink(q) for q in found)
         retry = any(_off_circle(q) for q in found)
         T_away = None   # past a kink the new point lies on another arm: onward on it is away from the kink

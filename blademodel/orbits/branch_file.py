@@ -116,8 +116,10 @@ def save_branch(branch: Branch, path, config=None, run: dict | None = None) -> N
                            ("special_multiplier_re", [p.multiplier.real for p in branch.special]),
                            ("special_multiplier_im", [p.multiplier.imag for p in branch.special]),
                            ("special_index", [p.index for p in branch.special]),
-                           ("special_bracket_lo", [np.nan if p.bracket is None else p.bracket[0] for p in branch.special]),
-                           ("special_bracket_hi", [np.nan if p.bracket is None else p.bracket[1] for p in branch.special])):
+                           ("special_bracket_lo", [np.nan if p.bracket is None else p.bracket[0]
+                                                   for p in branch.special]),
+                           ("special_bracket_hi", [np.nan if p.bracket is None else p.bracket[1]
+                                                   for p in branch.special])):
             v = ds.createVariable(name, "f8" if "index" not in name else "i8", ("special",))
             v[:] = np.asarray(data)
         ds["special_kind"].long_name = "kind of special point: fold, period-doubling, neimark-sacker, grazing, nonsmooth-fold, border-collision"
