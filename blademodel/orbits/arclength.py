@@ -46,7 +46,7 @@ from ..analysis.spectrum import dft_bin
 from ..numeric.blas_threads import blas_threads_for
 from .background import Locator, PendingPoint, resolve
 from .field_path import AffineFieldPath
-from .period_map import FlowError, PeriodMap, _copy, _key, worker_count
+from .period_map import FlowError, PeriodMap, _copy, _key, kernel_mode, worker_count
 from .shooting import (ShootingError, _n_coordinates, _orbit_samples, _same, _scale_of_excursions, _state_scale,
                        find_periodic_orbit)
 
@@ -450,8 +450,7 @@ def _last_mode(branch: Branch, integrator):
     """The mode of the branch's last orbit as the kernel takes it, or None where the branch does not know it."""
     if branch.modes.shape[0] != branch.params.size or branch.modes.shape[1] == 0 or np.any(branch.modes[-1] < 0):
         return None
-    row = branch.modes[-1].astype(np.int64)
-    return row.copy() if getattr(integrator, "kernel", "") == "contact" else int(row[0])
+    return kernel_mode(integrator, branch.modes[-1].astype(np.int64))
 
 
 def _mode_row(mode) -> np.ndarray:
@@ -917,9 +916,13 @@ class _Context:
         self.locator: Locator | None = None   # where grazing points are located (set by _run for its branch)
         self.n = scale.size
         self.iterations = 0
-        self.events = -1   # events of the orbit of the last residual's run
-        self._run = None   # that run (its signature: :attr:`signature`)
+        self._run = None   # the last residual's run (its events and signature: :attr:`events`, :attr:`signature`)
         self.why = ""
+
+    @property
+    def events(self) -> int:
+        """The events of the orbit of the last residual's run (``-1`` before any)."""
+        return -1 if self._run is None else self._run.events
 
     @property
     def signature(self) -> tuple | None:
@@ -979,7 +982,6 @@ class _Context:
         P = self.fam.map_at(X[-1] * self.span)
         y = X[:-1] * self.scale
         Py, mode_end = P(y, _copy(mode))
-        self.events = P.last_events
         self._run = P.last_run
         return (Py - y) / self.scale, mode_end
 

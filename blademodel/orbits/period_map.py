@@ -132,8 +132,6 @@ class PeriodMap:
         self.n = integrator.n_physical
         self.evaluations = 0   # integrations of the map (each over ``periods`` excitation periods)
         self.replays = 0       # tangent replays of a kept run (no integration)
-        self.last_events = -1
-        self.last_run: MapRun | None = None   # the last run made or returned again by run()
         self.method = jacobian
         self.exact = jacobian in ("auto", "tangent") and kernel in ("product", "contact")
         self._contact_tangent = None
@@ -154,7 +152,6 @@ class PeriodMap:
         y = np.asarray(y, dtype=float)
         key = (y[:self.n].tobytes(), _key(mode))
         if self._last is not None and self._last[0] == key:
-            self.last_run = self._last[1]
             return self._last[1]
         full = np.zeros(ig.n_state)
         full[:self.n] = y[:self.n]
@@ -177,10 +174,18 @@ class PeriodMap:
         r = MapRun(start=start, mode=m0, fired=fired, end=full, mode_end=mode_end, t=rec[0], Y=rec[1][:, :self.n],
                    states=rec[1], log=log, n_log=int(counters[C_LOGGED]), events=int(counters[C_EVENTS]),
                    modes=rec[2] if len(rec) > 2 else None)
-        self.last_events = r.events
         self._last = (key, r)
-        self.last_run = r
         return r
+
+    @property
+    def last_run(self) -> MapRun | None:
+        """The last run :meth:`run` made or returned again (the one it keeps)."""
+        return None if self._last is None else self._last[1]
+
+    @property
+    def last_events(self) -> int:
+        """The events the last run crossed (``-1`` before any)."""
+        return -1 if self._last is None else self._last[1].events
 
     def derivatives(self, y, mode, dp=None, dperiod: float = 0.0):
         """``P(y)``, its mode, ``dP/dy`` and (with ``dp``) ``dP/dlambda`` by the tangent of the flow.
