@@ -11,7 +11,8 @@ orbit, the field by the continuation range).
 * **Jacobian**: the monodromy matrix from the tangent of the period map
   (:class:`~blademodel.orbits.period_map.PeriodMap`: variational equations with
   saltation matrices, replaying the run the last residual made) where the kernel has
-  one, else central differences; the field's column is a forward difference of the map.
+  one, else central differences; the field's column is a forward difference of the map,
+  or, on a smooth stretch, from the tangent of the last points (:meth:`_Context.column_rule`).
 * **Prediction**: on a smooth stretch, the quadratic through the last three points and
   the Jacobian extrapolated from the last two; else the tangent step and the last
   Jacobian.
@@ -35,6 +36,7 @@ bisection cannot close).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field, replace
 from typing import Callable
@@ -653,7 +655,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     jumped = ahead = switched = False
     while earlier + len(pts) < max_points:
         X_pred, A_pred = ctx.predict(pts, X, T, A, h)
-        X_new, m_new, A_new = ctx.correct(X_pred, T, m, A_pred)
+        X_new, m_new, A_new = ctx.correct(X_pred, T, m, A_pred, column=ctx.column_rule(pts))
         secant = False
         if X_new is None and abs(T[-1]) > 0.1:
             # Newton on the arclength system can cycle across a kink of the map (a switching
@@ -866,6 +868,25 @@ def _other_arm(ctx, pts, X, mode, reach, fractions=(1e-5, 1e-4, 1e-3), displacem
                         accept=lambda X_new: ctx.events != last["events"] and np.linalg.norm(X_new - X) <= reach)
 
 
+def _end_tangent(points):
+    """The unit tangent at the last of ``points`` of the polynomial through them in their chord length (None where two
+    coincide): the derivative of its Lagrange form there."""
+    s = [0.0]
+    for p, q in zip(points[:-1], points[1:]):
+        d = q - p
+        s.append(s[-1] + math.sqrt(float(np.dot(d, d))))
+    s = [v - s[-1] for v in s]
+    if any(b <= a for a, b in zip(s[:-1], s[1:])):
+        return None
+    # the Lagrange basis' derivatives at the last point, s = 0: for the others only the product without (s - 0)
+    # survives; the last one's is -sum(1 / s_j)
+    weights = [math.prod(-v for k, v in enumerate(s[:-1]) if k != i)
+               / math.prod(si - v for k, v in enumerate(s) if k != i) for i, si in enumerate(s[:-1])]
+    weights.append(-sum(1.0 / v for v in s[:-1]))
+    t = np.dot(weights, points)
+    return t / math.sqrt(float(np.dot(t, t)))
+
+
 def _tangent(A, previous):
     """The unit null vector of ``A`` (``n x (n + 1)``) pointing the way of ``previous``."""
     M = np.vstack([A, previous])
@@ -890,6 +911,9 @@ def _oriented(T_new, A_new, A, T):
     return T_new if s_old * s_new >= 0 else -T_new
 
 
+#: :meth:`_Context.column_rule` takes a Jacobian's field column from the tangent of the branch's last points where
+#: that tangent's estimated error, relative to its field component, is at most this (else a difference quotient).
+COLUMN_ACCURACY = 1e-2
 #: Halvings of a correction step whose residual did not fall, before the step is taken as it is.
 MAX_HALVINGS = 4
 #: Corrections in a row that do not halve the best residual, after which a correction gives up.
@@ -952,10 +976,10 @@ class _Context:
         A = self._jacobian_at(Xc, mode)
         return (Xc, mode, A) if A is not None else (None, mode, None)
 
-    def _jacobian_at(self, X, mode):
+    def _jacobian_at(self, X, mode, column=None):
         """:meth:`jacobian` at a corrected point, or None (with ``why``) where a perturbed integration fails."""
         try:
-            return self.jacobian(X, mode)
+            return self.jacobian(X, mode, column)
         except (FlowError, ValueError) as e:
             self.why = f"the Jacobian at the corrected point: {e}"
             return None
@@ -985,7 +1009,7 @@ class _Context:
         self._run = P.last_run
         return (Py - y) / self.scale, mode_end
 
-    def jacobian(self, X, mode):
+    def jacobian(self, X, mode, column=None):
         """``d residual / dX`` (``n x (n + 1)``): the tangent of the flow where it exists, else central differences.
 
         The state columns are the monodromy matrix (the tangent replays the run the
@@ -995,7 +1019,9 @@ class _Context:
         which follows the parameters and the moving period step by step, costs about
         seven. Its error, about ``delta`` relative, only slows the corrections by as
         much; the orbits are solved to ``tol`` whatever the column, and the multipliers
-        come from the exact monodromy.
+        come from the exact monodromy. ``column``, where given (:meth:`column_rule`), is
+        asked first for the field's column from the state columns and may spare that
+        integration.
         """
         n, d = self.n, self.rel_step
         lam = X[-1] * self.span
@@ -1010,10 +1036,12 @@ class _Context:
         if J is None:
             J = P.differences(y, mode, self.scale, d)
         A[:, :n] = (J - np.eye(n)) * self.scale[None, :] / self.scale[:, None]
-        A[:, n] = (self.fam.map_at(lam + d * self.span).plain(y, mode) - P(y, mode)[0]) / self.scale / d
+        c = None if column is None else column(X, mode, A[:, :n])
+        A[:, n] = c if c is not None else \
+            (self.fam.map_at(lam + d * self.span).plain(y, mode) - P(y, mode)[0]) / self.scale / d
         return A
 
-    def correct(self, X, T, mode, A=None, jacobian=True, tol=None, newton=True):
+    def correct(self, X, T, mode, A=None, jacobian=True, tol=None, newton=True, column=None):
         """Newton on the orbit and arclength conditions from the prediction ``X``; ``(None, ..)`` on failure.
 
         With ``A`` (the Jacobian at the last point) the first attempt is Broyden's
@@ -1027,6 +1055,7 @@ class _Context:
         only the orbit's events, ``self.events``, which the last residual's run counted).
         ``tol`` replaces ``self.tol`` for this correction. Without ``newton`` (and with
         ``A``) only Broyden's method is tried, in each mode: a trial that may fail cheaply.
+        ``column`` goes to :meth:`jacobian` for the converged point's Jacobian.
         """
         tol = self.tol if tol is None else tol
         Xp = X.copy()
@@ -1087,7 +1116,7 @@ class _Context:
             if _same(mode_end, mode):
                 if not jacobian:
                     return Xc, mode, None
-                A = self._jacobian_at(Xc, mode)
+                A = self._jacobian_at(Xc, mode, column)
                 if A is None:
                     continue
                 return Xc, mode, A
@@ -1130,6 +1159,45 @@ class _Context:
         Lc = (h - s0) * (h - s1) / (s0 * s1)
         Aa, Ab = (self._jacobian_of(q) for q in (a, b))
         return La * Xa + Lb * Xb + Lc * X, La * Aa + Lb * Ab + Lc * A
+
+    def column_rule(self, pts):
+        """The field's column of a new point's Jacobian from the branch's own points, or None.
+
+        On a smooth stretch (the last three points in one mode and with one event
+        signature, the last two reached by regular steps), where the new point keeps that
+        mode and signature, the branch's tangent ``t`` at the new point is that of the
+        quadratic through the last two points and it, in their arclength, to second order
+        in the step. Along the branch the residual stays zero, ``A_y t_y + a t_lambda = 0``,
+        which gives the field's column ``a = -A_y t_y / t_lambda`` from the exact state
+        columns ``A_y``, without the integration at a shifted value of the field that the
+        difference quotient takes. The cubic through the last three points and the new one
+        gives the quadratic's error: where ``|t_cubic - t| / |t_lambda|`` exceeds
+        :data:`COLUMN_ACCURACY` (a bent stretch, or near a fold, where the division
+        magnifies the error) the rule returns None and the difference is taken. The column
+        only starts Broyden's method at the next point and orients the next tangent: the
+        orbits are solved to ``tol`` and the multipliers come from the exact monodromy
+        whatever it is. Returns ``column(X, mode, A_y)``, the column at the corrected
+        point ``X`` or None, for :meth:`jacobian`.
+        """
+        if len(pts) < 3:
+            return None
+        z, a, b = pts[-3], pts[-2], pts[-1]
+        if not (a.get("regular") and b.get("regular") and z["signature"] == a["signature"] == b["signature"]
+                and _key(z["mode"]) == _key(a["mode"]) == _key(b["mode"])):
+            return None
+        before = [np.append(q["state"] / self.scale, q["param"] / self.span) for q in (z, a, b)]
+
+        def column(X, mode, A_y):
+            if self.signature != b["signature"] or _key(mode) != _key(b["mode"]):
+                return None
+            t = _end_tangent(before[1:] + [X])
+            t_cubic = _end_tangent(before + [X])
+            if t is None or t_cubic is None or \
+                    np.linalg.norm(t_cubic - t) > COLUMN_ACCURACY * abs(t[-1]):
+                return None
+            return -(A_y @ t[:-1]) / t[-1]
+
+        return column
 
     def _jacobian_of(self, q):
         """The scaled Jacobian of the branch point ``q`` in the current state scale."""
