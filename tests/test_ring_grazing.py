@@ -1,9 +1,14 @@
 """A ring's grazing points carry the multipliers of the branch beside them, not a difference quotient across the kink."""
 
-import numpy as np
+from pathlib import Path
 
-from blademodel.config import BladedDisk
+import numpy as np
+import pytest
+
+from blademodel.config import BladedDisk, load_config
 from blademodel.orbits import continuation
+
+MODELS = Path(__file__).resolve().parent.parent / "models"
 
 
 def test_a_grazing_on_a_ring_reports_the_multiplier_of_the_branch_beside_it():
@@ -21,3 +26,18 @@ def test_a_grazing_on_a_ring_reports_the_multiplier_of_the_branch_beside_it():
         k = p.index
         assert b.events[k] != b.events[k + 1] and b.params[k] <= p.param <= b.params[k + 1]
         assert min(largest[k], largest[k + 1]) - 1e-12 <= abs(p.multiplier) <= max(largest[k], largest[k + 1]) + 1e-12
+
+
+@pytest.mark.slow
+def test_the_bilinear_ring_stalls_near_290_84_at_500_steps_a_period_and_not_at_2000():
+    """The bilinear 24-blade ring continued from 290.8 rad/s: at 500 steps a period it stops near 290.84 rad/s (the
+    step falls below ``ds_min``; shooting there finds only an orbit that starts three contacts in slip off their
+    friction limit and comes back in stick, which the mode check refuses), and the message says that more steps a
+    period may get through; at 2000 the branch passes that value (290.92 reached)."""
+    cfg = load_config(MODELS / "bladed_disk_24_bilinear.yaml")
+    coarse = continuation(cfg, "omega", 290.8, 290.95, workers=1, steps_per_period=500, max_points=60, ds_min=1e-4)
+    assert not coarse.message.startswith("reached")
+    assert 290.8 < coarse.params[-1] < 290.9
+    assert "steps_per_period (--steps-per-period) 1000 instead of 500" in coarse.message
+    fine = continuation(cfg, "omega", 290.8, 290.92, workers=1, steps_per_period=2000, max_points=60)
+    assert fine.message == "reached omega = 290.92"
