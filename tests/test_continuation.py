@@ -511,6 +511,33 @@ def test_the_coulomb_pair_s_whole_branch_gets_through_at_long_steps(start, stop,
     assert (kinds.count("fold"), kinds.count("nonsmooth-fold"), kinds.count("period-doubling")) == (3, 1, 4)
 
 
+def test_a_shot_onto_a_side_arm_is_undone_when_the_next_step_runs_back(monkeypatch):
+    """The Coulomb pair down from 600 rad/s at ``ds_max = 0.3`` on the path that the predictor's smooth-stretch test by
+    event signature takes (tried and not kept: it is reproduced here by refusing the quadratic where the signatures
+    differ): from 243.03 rad/s a fixed-value shot lands at 227.52 rad/s on an arm of 13 events that ends at a grazing
+    at 227.66 rad/s, and the next regular step runs back across it onto the branch. Without the backtracking the
+    branch retraced itself up to 600 rad/s and reported every fold and period doubling above 243 rad/s twice; with
+    it, it goes back to 243.03, on with shorter steps and no shot, and reaches 150 rad/s with each once. (On this
+    path the step from 253.8 to 243.0 rad/s jumps the pair of period doublings at 250.32 and 245.37, an unstable
+    window between stable ends: not asserted.)"""
+    from blademodel.orbits import arclength as al
+    quadratic = al._Context.predict
+
+    def predict(self, pts, X, T, A, h):
+        if len(pts) >= 3 and A is not None:
+            a, b, c = pts[-3:]
+            if a["events"] == b["events"] == c["events"] and not a["signature"] == b["signature"] == c["signature"]:
+                return X + h * T, A
+        return quadratic(self, pts, X, T, A, h)
+
+    monkeypatch.setattr(al._Context, "predict", predict)
+    b = continuation(BladePair(friction="coulomb"), "omega", 600.0, 150.0, ds_max=0.3, max_points=3000, workers=1)
+    assert b.message == "reached omega = 150"
+    bifurcations = [round(q.param, 3) for q in b.special if q.kind in ("fold", "period-doubling", "nonsmooth-fold")]
+    assert len(bifurcations) == len(set(bifurcations)) and len(bifurcations) >= 6
+    assert np.all(np.diff(b.params[b.params < 300.0]) < 0.5)   # no way back up below 300 rad/s
+
+
 def test_a_branch_that_cannot_start_says_where_and_what_may_find_an_orbit(capsys):
     """At mu = 1 the bilinear pair's motion from rest is not near a period-1 orbit after 20 periods: shooting stalls
     at a residual of 0.26. The error names the field's value and how the start was made, and says what may help;

@@ -653,16 +653,18 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     h = ds
     message = f"left [{lo:g}, {hi:g}] in {name}"
     jumped = ahead = switched = False
+    shots = True        # fixed-value shots allowed (not on the retry of a step whose shot led onto a side arm)
+    landing = None      # where the branch stood before its last fixed-value shot, while a reversal may undo it
     while earlier + len(pts) < max_points:
         X_pred, A_pred = ctx.predict(pts, X, T, A, h)
         X_new, m_new, A_new = ctx.correct(X_pred, T, m, A_pred, column=ctx.column_rule(pts))
         secant = False
-        if X_new is None and abs(T[-1]) > 0.1:
+        if X_new is None and abs(T[-1]) > 0.1 and shots:
             # Newton on the arclength system can cycle across a kink of the map (a switching
             # time passing the section); away from folds, shooting at the predicted value does not
             X_new, m_new, A_new = ctx.correct_at_value(X + h * T, m)
             secant = X_new is not None
-        if X_new is None and h / 2 < ds_min and not ahead and len(pts) > 1:
+        if X_new is None and h / 2 < ds_min and not ahead and len(pts) > 1 and shots:
             # the arclength corrections fail at every step length just before a kink of the map (a
             # stick phase that appears or vanishes): shooting at values of the field just past it,
             # from the last orbit, converges (the Coulomb pair at 164.915 rad/s, in 2 to 5 steps).
@@ -745,6 +747,27 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             T_new = _tangent(A_new, T)
             if A is not None and T_new[-1] * T[-1] < 0:
                 T_new = _oriented(T_new, A_new, A, T)
+        if landing is not None and new["regular"] and not jumped and not off_circle and \
+                float(X_new[-1] - X[-1]) * float(T[-1]) < 0 and \
+                not any(getattr(q, "kind", "") in ("fold", "nonsmooth-fold") for q in found):
+            # a regular step that runs back in the field with no fold, soon after a fixed-value shot: the
+            # shot landed on a side arm that ends at a grazing, and this step crossed back onto the branch
+            # (which it would retrace). Back to where the shot started, shorter, without shots
+            del pts[landing["points"]:]
+            del special[landing["special"]:]
+            X, T, A, m, h = landing["X"], landing["T"], landing["A"], landing["m"], landing["h"] / 2
+            ctx.scale = landing["scale"]
+            landing, shots, jumped, ahead = None, False, False, False
+            continue
+        if secant:
+            landing = {"points": len(pts), "special": len(special), "X": X, "T": T, "A": A, "m": m, "h": h,
+                       "scale": ctx.scale.copy(), "steps": 0}
+        elif landing is not None:
+            landing["steps"] += 1
+            if landing["steps"] > LANDING_WATCH:
+                landing = None
+        if new["regular"]:
+            shots = True
         if secant and ahead:
             h = max(h, 4 * ds_min)   # past the kink: steps grow again from there
         ahead = False
@@ -928,6 +951,9 @@ def _oriented(T_new, A_new, A, T):
 #: :meth:`_Context.column_rule` takes a Jacobian's field column from the tangent of the branch's last points where
 #: that tangent's estimated error, relative to its field component, is at most this (else a difference quotient).
 COLUMN_ACCURACY = 1e-2
+#: Regular steps after a fixed-value shot during which a step that runs back in the field with no fold sends the
+#: branch back to before the shot.
+LANDING_WATCH = 3
 #: Halvings of a correction step whose residual did not fall, before the step is taken as it is.
 MAX_HALVINGS = 4
 #: Corrections in a row that do not halve the best residual, after which a correction gives up.
