@@ -31,9 +31,9 @@ def test_a_grazing_on_a_ring_reports_the_multiplier_of_the_branch_beside_it():
 @pytest.mark.slow
 def test_the_bilinear_ring_stalls_near_290_84_at_500_steps_a_period_and_not_at_2000():
     """The bilinear 24-blade ring continued from 290.8 rad/s: at 500 steps a period it stops near 290.84 rad/s (the
-    step falls below ``ds_min``; shooting there finds only an orbit that starts three contacts in slip off their
-    friction limit and comes back in stick, which the mode check refuses), and the message says that more steps a
-    period may get through; at 2000 the branch passes that value (290.92 reached)."""
+    step falls below ``ds_min``; at 1000 steps, shooting at 290.85 rad/s finds only an orbit that starts three
+    contacts in slip off their friction limit and comes back in stick, which the mode check refuses), and the
+    message says that more steps a period may get through; at 2000 the branch passes that value (290.92 reached)."""
     cfg = load_config(MODELS / "bladed_disk_24_bilinear.yaml")
     coarse = continuation(cfg, "omega", 290.8, 290.95, workers=1, steps_per_period=500, max_points=60, ds_min=1e-4)
     assert not coarse.message.startswith("reached")

@@ -749,10 +749,13 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
                 T_new = _oriented(T_new, A_new, A, T)
         if landing is not None and new["regular"] and not jumped and not off_circle and \
                 float(X_new[-1] - X[-1]) * float(T[-1]) < 0 and \
-                not any(getattr(q, "kind", "") in ("fold", "nonsmooth-fold") for q in found):
+                not any(q.kind in ("fold", "nonsmooth-fold") for q in found):
             # a regular step that runs back in the field with no fold, soon after a fixed-value shot: the
             # shot landed on a side arm that ends at a grazing, and this step crossed back onto the branch
             # (which it would retrace). Back to where the shot started, shorter, without shots
+            for q in special[landing["special"]:]:
+                if isinstance(q, PendingPoint) and q.future is not None:
+                    q.future.cancel()   # a location not yet begun in the locator's thread is not wanted
             del pts[landing["points"]:]
             del special[landing["special"]:]
             X, T, A, m, h = landing["X"], landing["T"], landing["A"], landing["m"], landing["h"] / 2
@@ -802,13 +805,14 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
 def _stalled(ds_min, name, value, why, steps_per_period) -> str:
     """Why a branch stopped where its step fell below ``ds_min``, with what may get it through.
 
-    Where a phase of the orbit appears, the integrator's discrete flow can have no orbit
-    over a short stretch of the field (the kernel sees the phase only once it spans a step
-    end), and the stretch shrinks with the step: the bilinear 24-blade ring stops at
-    290.847 rad/s at 1000 steps a period and 290.839 at 500, and passes at 2000.
+    The integrator's discrete flow can lack orbits over a short stretch of the field, and
+    the stretch moves with the step: the bilinear 24-blade ring from 290.6 rad/s stops at
+    290.847 rad/s at 1000 steps a period and at 290.839 at 500, and passes at 2000 (where a
+    run from 290.8 to 290.95 stops at 290.936 instead); the Coulomb pair has such a gap at
+    305.78 rad/s.
     """
-    return (f"the step fell below ds_min = {ds_min:g} at {name} = {value:.6g}: {why} (where a phase of the orbit "
-            f"appears the integrator's discrete flow may have no orbit over a short stretch: more steps a period, "
+    return (f"the step fell below ds_min = {ds_min:g} at {name} = {value:.6g}: {why} (the integrator's discrete "
+            f"flow may lack orbits over a short stretch, which moves with the step: more steps a period, "
             f"steps_per_period (--steps-per-period) {2 * steps_per_period} instead of {steps_per_period}, may get "
             f"through)")
 
