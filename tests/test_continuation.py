@@ -646,3 +646,33 @@ def test_a_multiplier_that_jumps_across_the_circle_is_a_border_collision():
     assert bracket is not None and bracket[0] < 0.3137 <= bracket[1] and bracket[1] - bracket[0] <= 0.1
     early = _SyntheticBranch(lambda s: 0.991 if s < 0.3137 else 1.16, fails_within=(0.1, 0.9))
     assert early.locate()[1] is None
+
+
+def test_a_correction_that_lands_on_the_branch_already_passed_is_refused(monkeypatch):
+    """The bilinear pair down from 600 rad/s at ``ds_max = 0.02`` once took a correction from 261.45 rad/s that
+    converged 35 steps from its prediction, on the branch at 266.15 rad/s, already passed, and went round that
+    stretch until ``max_points``. That path is reproduced here by making one correction (the 20th step's) return the
+    orbit of the 8th point: a correction farther from its prediction than ``ds_max`` and onto the branch already
+    passed is refused, and the branch goes on down as the unpatched one does. Without the refusal it goes round
+    again (the field rises between points)."""
+    from blademodel.orbits import arclength as al
+    correct = al._Context.correct
+    seen = []
+
+    def wandering(self, X, T, mode, A=None, *args, **kwargs):
+        out = correct(self, X, T, mode, A, *args, **kwargs)
+        if "column" not in kwargs or out[0] is None:   # only the steps' own corrections
+            return out
+        seen.append((out[0][:-1] * self.scale, out[0][-1] * self.span, out[1], out[2]))
+        if len(seen) == 20:
+            y, lam, m, A_old = seen[7]
+            return np.append(y / self.scale, lam / self.span), m, A_old   # (its Jacobian in its own scale)
+        return out
+
+    cfg = BladePair(friction="bilinear")
+    plain = continuation(cfg, "omega", 280.0, 270.0, ds_max=0.02, max_points=200, workers=1)
+    monkeypatch.setattr(al._Context, "correct", wandering)
+    b = continuation(cfg, "omega", 280.0, 270.0, ds_max=0.02, max_points=200, workers=1)
+    assert len(seen) >= 20 and plain.message == b.message == "reached omega = 270"
+    assert np.all(np.diff(b.params) < 0)
+    assert abs(b.params.size - plain.params.size) <= 2

@@ -31,6 +31,38 @@ def test_the_end_tangent_converges_at_the_polynomial_s_order(points, order):
     assert al._end_tangent([_curve(0.1), _curve(0.1), _curve(0.3)]) is None   # coinciding points
 
 
+class _Run:
+    """What the rule reads of the last residual's run: its event signature."""
+
+    def signature(self):
+        return ("same",)
+
+
+def test_the_rule_s_column_converges_at_third_order_on_a_known_branch():
+    """On a branch whose tangent is known (the space curve above, its residual's state columns a fixed matrix and
+    its field column the one that makes the exact tangent a null vector), the rule's column converges at third order
+    in the spacing: it is taken from the cubic through the last four points, whose tangent is third order, while
+    the quadratic's (second order) only estimates the error. The quadratic's column would converge at second
+    order."""
+    rng = np.random.default_rng(3)
+    A_y = rng.standard_normal((3, 3))
+    ctx = al._Context(None, np.ones(3), 1.0, 1e-10, 1e-6, 8)
+    ctx._run = _Run()
+    u0, offsets = 0.7, np.array([-3.0, -1.7, -1.0, 0.0])
+    t = _curve_tangent(u0)
+    exact = -(A_y @ t[:-1]) / t[-1]
+    errors = []
+    for h in (0.02, 0.01, 0.005):
+        X = [_curve(u0 + h * o) for o in offsets]
+        pts = [{"state": x[:-1], "param": x[-1], "signature": ("same",), "mode": 0, "regular": True} for x in X[:-1]]
+        column = ctx.column_rule(pts)(X[-1], 0, A_y)
+        errors.append(np.linalg.norm(column - exact) / np.linalg.norm(exact))
+    measured = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(np.abs(measured - 3.0) < 0.3), measured
+    ctx._run = None   # another signature at the new point: no column
+    assert ctx.column_rule(pts)(X[-1], 0, A_y) is None
+
+
 def test_the_column_from_the_points_equals_central_differences_and_leaves_the_branch_as_it_was():
     """Along the bilinear pair's branch the column the rule gives (where it gives one) equals central differences of
     the period map in the field, with a step small enough not to cross a grazing, to ``COLUMN_ACCURACY``; and the

@@ -658,6 +658,12 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     while earlier + len(pts) < max_points:
         X_pred, A_pred = ctx.predict(pts, X, T, A, h)
         X_new, m_new, A_new = ctx.correct(X_pred, T, m, A_pred, column=ctx.column_rule(pts))
+        if X_new is not None and np.linalg.norm(X_new - X_pred) > ds_max and _passed(ctx, pts[:-2], X_new, h):
+            # Newton's method wandered off and converged on the part of the branch already passed
+            # (measured: from 261.45 rad/s, 35 steps away, onto the bilinear pair's branch at 266.15
+            # rad/s, which the branch then went round again until max_points)
+            ctx.why = "the correction converged back onto the branch already passed"
+            X_new = None
         secant = False
         if X_new is None and abs(T[-1]) > 0.1 and shots:
             # Newton on the arclength system can cycle across a kink of the map (a switching
@@ -800,6 +806,14 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     else:
         message = f"stopped after max_points = {max_points} points at {name} = {X[-1] * span:.6g}"
     return message
+
+
+def _passed(ctx, pts, X, reach) -> bool:
+    """Whether ``X`` lies within ``reach`` of one of the branch points ``pts`` (in the current scaling)."""
+    if not pts:
+        return False
+    P = np.array([np.append(q["state"] / ctx.scale, q["param"] / ctx.span) for q in pts])
+    return bool(np.min(np.linalg.norm(P - X, axis=1)) <= reach)
 
 
 def _stalled(ds_min, name, value, why, steps_per_period) -> str:
@@ -1217,7 +1231,9 @@ class _Context:
         difference quotient takes. The cubic through the last three points and the new one
         gives the quadratic's error: where ``|t_cubic - t| / |t_lambda|`` exceeds
         :data:`COLUMN_ACCURACY` (a bent stretch, or near a fold, where the division
-        magnifies the error) the rule returns None and the difference is taken. The column
+        magnifies the error) the rule returns None and the difference is taken; elsewhere
+        the column is taken from the cubic's tangent, one order better than the estimate
+        vouches for (as an embedded Runge-Kutta pair steps with its higher order). The column
         only starts Broyden's method at the next point and orients the next tangent: the
         orbits are solved to ``tol`` and the multipliers come from the exact monodromy
         whatever it is. Returns ``column(X, mode, A_y)``, the column at the corrected
@@ -1239,7 +1255,7 @@ class _Context:
             if t is None or t_cubic is None or \
                     np.linalg.norm(t_cubic - t) > COLUMN_ACCURACY * abs(t[-1]):
                 return None
-            return -(A_y @ t[:-1]) / t[-1]
+            return -(A_y @ t_cubic[:-1]) / t_cubic[-1]
 
         return column
 
