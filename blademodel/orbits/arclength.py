@@ -1099,7 +1099,7 @@ class _Context:
             (self.fam.map_at(lam + d * self.span).plain(y, mode) - P(y, mode)[0]) / self.scale / d
         return A
 
-    def correct(self, X, T, mode, A=None, jacobian=True, tol=None, newton=True, column=None):
+    def correct(self, X, T, mode, A=None, jacobian=True, tol=None, newton=True, column=None, quick=False):
         """Newton on the orbit and arclength conditions from the prediction ``X``; ``(None, ..)`` on failure.
 
         With ``A`` (the Jacobian at the last point) the first attempt is Broyden's
@@ -1113,7 +1113,9 @@ class _Context:
         only the orbit's events, ``self.events``, which the last residual's run counted).
         ``tol`` replaces ``self.tol`` for this correction. Without ``newton`` (and with
         ``A``) only Broyden's method is tried, in each mode: a trial that may fail cheaply.
-        ``column`` goes to :meth:`jacobian` for the converged point's Jacobian.
+        ``column`` goes to :meth:`jacobian` for the converged point's Jacobian. A ``quick``
+        correction (Broyden's method only) gives up at the first residual that does not fall,
+        without the halvings that may rescue it: for trials that have others beside them.
         """
         tol = self.tol if tol is None else tol
         Xp = X.copy()
@@ -1145,6 +1147,8 @@ class _Context:
                         since_best += 1
                         if since_best > STALL:
                             raise FlowError(f"the corrections stalled at a residual of {best:.2g}")
+                    if quick and res >= res_old:
+                        raise FlowError(f"a quick trial's residual rose from {res_old:.2g} to {res:.2g}")
                     F = np.append(r, np.dot(T, Xc - Xp))
                     if chord and X_old is not None:   # Broyden: the secant condition along the step taken
                         step = Xc - X_old
@@ -1394,7 +1398,8 @@ class _Context:
                 return self.point(Xm, mm, Am)
         return None
 
-    def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian, tol=None, at_value=False, newton=True, step=None):
+    def _corrected(self, X_lo, X_hi, theta, mode, A, jacobian, tol=None, at_value=False, newton=True, step=None,
+                   quick=False):
         """The branch point between two of its points ``X_lo``, ``X_hi``, a fraction ``theta`` of the way.
 
         Predicted on the chord between them and corrected with ``A`` as Broyden's first
@@ -1422,7 +1427,7 @@ class _Context:
         if fixed:
             normal = np.zeros_like(normal)
             normal[-1] = 1.0
-        Xm, mm, Am = self.correct(Xp, normal, mode, A, jacobian=jacobian, tol=tol, newton=newton)
+        Xm, mm, Am = self.correct(Xp, normal, mode, A, jacobian=jacobian, tol=tol, newton=newton, quick=quick)
         if Xm is None and not fixed and newton:
             Xm, mm, Am = self.correct_at_value(Xp, mode, jacobian=jacobian)
         if Xm is not None and not (_between(Xm, X_lo, X_hi) or (fixed and step is not None and _near(Xm, *step))):
@@ -1561,7 +1566,7 @@ class _Context:
                     continue
             for theta in (0.5, 0.25, 0.75):   # a trial right at the grazing point can stall: one beside it
                 Xm, mm, _ = self._corrected(X_lo, X_hi, theta, mode, a["A"] if theta <= 0.5 else b["A"], False,
-                                            trial_tol, at_value=True, newton=False, step=step)
+                                            trial_tol, at_value=True, newton=False, step=step, quick=True)
                 if Xm is not None:
                     break
             if Xm is None:
@@ -1585,6 +1590,8 @@ class _Context:
                 Xb, mb, _ = self.correct(Xt, d / np.linalg.norm(d), mt, a["A"], jacobian=False)
             if Xb is not None:
                 signature = self.signature
+                if bracket is not None:   # (solved to tol, the point may have moved just out of it: by 2e-10 rad/s)
+                    bracket = (min(bracket[0], float(Xb[-1] * self.span)), max(bracket[1], float(Xb[-1] * self.span)))
             else:
                 # the trial, solved only to tell its side, is no orbit to tol: it may lie where none is (a gap of
                 # the discrete flow, from 305.7811 to 305.7831 rad/s on the Coulomb pair, where trials solved to
