@@ -517,9 +517,10 @@ def test_a_shot_onto_a_side_arm_is_undone_when_the_next_step_runs_back(monkeypat
     differ): from 243.03 rad/s a fixed-value shot lands at 227.52 rad/s on an arm of 13 events that ends at a grazing
     at 227.66 rad/s, and the next regular step runs back across it onto the branch. Without the backtracking the
     branch retraced itself up to 600 rad/s and reported every fold and period doubling above 243 rad/s twice; with
-    it, it goes back to 243.03, on with shorter steps and no shot, and reaches 150 rad/s with each once. (On this
-    path the step from 253.8 to 243.0 rad/s jumps the pair of period doublings at 250.32 and 245.37, an unstable
-    window between stable ends: not asserted.)"""
+    it, it goes back to 243.03, on with shorter steps and no shot, and reaches 150 rad/s with each once. On this
+    path a step from 253.8 to 243.0 rad/s jumped the pair of period doublings at 250.32 and 245.37 (an unstable
+    window between stable ends) until the step was kept short where the leading multiplier's modulus changes fast
+    (``MULTIPLIER_STEP``): both are found now, where the branch at shorter steps has them."""
     from blademodel.orbits import arclength as al
     quadratic = al._Context.predict
 
@@ -536,6 +537,8 @@ def test_a_shot_onto_a_side_arm_is_undone_when_the_next_step_runs_back(monkeypat
     bifurcations = [round(q.param, 3) for q in b.special if q.kind in ("fold", "period-doubling", "nonsmooth-fold")]
     assert len(bifurcations) == len(set(bifurcations)) and len(bifurcations) >= 6
     assert np.all(np.diff(b.params[b.params < 300.0]) < 0.5)   # no way back up below 300 rad/s
+    doublings = sorted(q.param for q in b.special if q.kind == "period-doubling" and q.param < 300.0)
+    np.testing.assert_allclose(doublings, [245.374, 250.318], atol=2e-3)
 
 
 def test_a_branch_that_cannot_start_says_where_and_what_may_find_an_orbit(capsys):
