@@ -679,3 +679,52 @@ def test_a_correction_that_lands_on_the_branch_already_passed_is_refused(monkeyp
     assert len(seen) >= 20 and plain.message == b.message == "reached omega = 270"
     assert np.all(np.diff(b.params) < 0)
     assert abs(b.params.size - plain.params.size) <= 2
+
+
+def test_a_branch_goes_on_across_a_stretch_with_no_orbit_and_reports_the_gap(monkeypatch, capsys):
+    """Where the continuation finds no orbit over a stretch of the field (the discrete flow's gaps: the bilinear
+    24-blade ring from 290.85 to 290.90 rad/s at 1000 steps a period), it used to stop there. Here every correction
+    and every shot is made to fail between 255.0 and 255.2 rad/s on the bilinear pair: the branch now goes on from
+    the first orbit that shooting farther on finds, reports a ``gap`` whose bracket holds the stretch, and its points
+    past the gap are the branch's orbits there (shooting from the unpatched branch's nearest orbits at the same
+    values). The command says so."""
+    from blademodel.orbits import arclength as al
+    from blademodel.orbits.period_map import FlowError
+    cfg = BladePair(friction="bilinear")
+    plain = continuation(cfg, "omega", 250.0, 260.0, workers=1)
+    residual = al._Context.residual
+
+    def gapped(self, X, mode):
+        if 255.0 < X[-1] * self.span < 255.2:
+            raise FlowError("no orbit here (a test's gap)")
+        return residual(self, X, mode)
+
+    monkeypatch.setattr(al._Context, "residual", gapped)
+    shoot = al._Context.correct_at_value
+
+    def gapped_shot(self, X, mode, jacobian=True):
+        if 255.0 < X[-1] * self.span < 255.2:
+            self.why = "no orbit here (a test's gap)"
+            return None, mode, None
+        return shoot(self, X, mode, jacobian)
+
+    monkeypatch.setattr(al._Context, "correct_at_value", gapped_shot)
+    b = continuation(cfg, "omega", 250.0, 260.0, workers=1)
+    assert b.message == plain.message == "reached omega = 260"
+    (gap,) = b.points("gap")
+    lo, hi = gap.bracket
+    assert 254.9 < lo <= 255.0 and 255.2 <= hi <= 255.0 + 0.03 * 10.0 + 1e-9 and gap.param == hi
+    assert np.all(np.diff(b.params) > 0) and not np.any((b.params > 255.0) & (b.params < 255.2))
+    from blademodel.config import apply_overrides
+    from blademodel.orbits import find_periodic_orbit
+    scale = np.max(np.abs(plain.states), axis=0)
+    for k in np.flatnonzero(b.params > hi)[:3]:   # past the gap: the branch's own orbits
+        i = np.argmin(np.abs(plain.params - b.params[k]))
+        model = apply_overrides(cfg, {"omega": float(b.params[k])}).build()
+        orbit = find_periodic_orbit(model, guess=plain.states[i], mode=int(plain.modes[i][0]), transient=0)
+        assert np.max(np.abs(orbit.state - b.states[k]) / scale) < 1e-8
+    from pathlib import Path
+    from blademodel.cli import main
+    model = str(Path(__file__).resolve().parents[1] / "models" / "blade_pair_bilinear.yaml")
+    assert main(["continue", model, "--param", "omega", "--from", "250", "--to", "260"]) == 0
+    assert f"gap: no orbit found between omega = {lo:.8g} and {hi:.8g}" in capsys.readouterr().out

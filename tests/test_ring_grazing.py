@@ -33,7 +33,8 @@ def test_the_bilinear_ring_stalls_near_290_84_at_500_steps_a_period_and_not_at_2
     """The bilinear 24-blade ring continued from 290.8 rad/s: at 500 steps a period it stops near 290.84 rad/s (the
     step falls below ``ds_min``; at 1000 steps, shooting at 290.85 rad/s finds only an orbit that starts three
     contacts in slip off their friction limit and comes back in stick, which the mode check refuses), and the
-    message says that more steps a period may get through; at 2000 the branch passes that value (290.92 reached)."""
+    message says that more steps a period may get through; at 2000 the branch passes that value (290.92 reached).
+    (Shooting past the stall for a gap reaches only 3e-2 of this 0.15 rad/s range, 4.5e-3 rad/s, and finds none.)"""
     cfg = load_config(MODELS / "bladed_disk_24_bilinear.yaml")
     coarse = continuation(cfg, "omega", 290.8, 290.95, workers=1, steps_per_period=500, max_points=60, ds_min=1e-4)
     assert not coarse.message.startswith("reached")
@@ -41,3 +42,20 @@ def test_the_bilinear_ring_stalls_near_290_84_at_500_steps_a_period_and_not_at_2
     assert "steps_per_period (--steps-per-period) 1000 instead of 500" in coarse.message
     fine = continuation(cfg, "omega", 290.8, 290.92, workers=1, steps_per_period=2000, max_points=60)
     assert fine.message == "reached omega = 290.92"
+
+
+@pytest.mark.slow
+def test_the_bilinear_ring_goes_on_across_its_gap_near_290_9_and_reports_it():
+    """The bilinear 24-blade ring from 280 to 300 rad/s at 1000 steps a period: shooting from the orbit at 290.847
+    rad/s finds no orbit at 290.85, 290.86, 290.88 and 290.90 rad/s (it stalls at residuals of 2e-4 to 5e-4) and
+    finds one at 290.95 and beyond. The branch used to stop there or, on another path, to step across it unawares;
+    it now shoots farther on from the last orbit, goes on to 300 rad/s and reports a ``gap`` whose bracket holds
+    that stretch, with nothing located inside it."""
+    cfg = load_config(MODELS / "bladed_disk_24_bilinear.yaml")
+    b = continuation(cfg, "omega", 280.0, 300.0, workers=1)
+    assert b.message == "reached omega = 300"
+    (gap,) = b.points("gap")
+    lo, hi = gap.bracket
+    assert lo <= 290.85 and 290.90 <= hi < 291.2 and gap.param == hi
+    assert not [p for p in b.special if p.kind != "gap" and lo < p.param < hi]
+    assert len(b.points("neimark-sacker")) >= 10

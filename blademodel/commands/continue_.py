@@ -198,6 +198,11 @@ def run(args: argparse.Namespace) -> int:
           f"{branch.params[-1]:.6g} ({branch.message}); {int(np.sum(~branch.stable))} unstable; "
           f"{branch.integrations} integrations of the period map and {branch.replays} tangent replays")
     for p in branch.special:
+        if p.kind == "gap":
+            print(f"  gap: no orbit found between {args.param} = {p.bracket[0]:.8g} and {p.bracket[1]:.8g}; the branch "
+                  f"goes on from the orbit at {p.param:.8g}, which may lie on another branch (more steps a period, "
+                  f"--steps-per-period, may close the gap)")
+            continue
         within = "" if p.bracket is None else f", somewhere in [{p.bracket[0]:.8g}, {p.bracket[1]:.8g}]"
         print(f"  {p.kind} at {args.param} = {p.param:.8g}{within} (multiplier {p.multiplier.real:.6g}"
               f"{p.multiplier.imag:+.6g}i)")

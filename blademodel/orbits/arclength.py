@@ -62,6 +62,11 @@ class SpecialPoint:
     kind : str
         ``"fold"``, ``"period-doubling"``, ``"neimark-sacker"`` or ``"grazing"`` (the orbit's
         events change, which transitions or how many: a guard of the orbit touches zero), or
+        ``"gap"``: no orbit was found between the branch point before and this one (``bracket``),
+        where the step fell below ``ds_min``; the branch goes on from the first orbit that
+        shooting at fixed values past the stall found from the last one (the integrator's
+        discrete flow can lack orbits over a short stretch, which moves with the step: more
+        steps a period may close it; the orbits either side may lie on different branches);
         ``"nonsmooth-fold"``: the branch turns back at a kink of the map (a grazing), its
         stability changing with no multiplier on the unit circle (one jumps across it);
         located only to within the last step across the kink; or ``"border-collision"``:
@@ -652,7 +657,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     lo, hi = min(bounds), max(bounds)
     h = ds
     message = f"left [{lo:g}, {hi:g}] in {name}"
-    jumped = ahead = switched = False
+    jumped = ahead = switched = gap_tried = False
     shots = True        # fixed-value shots allowed (not on the retry of a step whose shot led onto a side arm)
     landing = None      # where the branch stood before its last fixed-value shot, while a reversal may undo it
     while earlier + len(pts) < max_points:
@@ -688,6 +693,14 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             switched = True
             X_new, m_new, A_new = _other_arm(ctx, pts, X, m, ds_max)
             arm = X_new is not None
+        gap = X_new is None and h / 2 < ds_min and jumped and shots and not gap_tried and len(pts) > 1
+        if gap:
+            # everything else failed at the shortest step: the discrete flow may have no orbit over a
+            # stretch (the bilinear 24-blade ring from 290.847 to about 290.93 rad/s at 1000 steps a
+            # period); shooting farther on, from the last orbit, may find the branch past it
+            gap_tried = True
+            X_new, m_new, A_new = _across_gap(ctx, pts, X, m)
+            gap = secant = X_new is not None
         if X_new is None:
             if h / 2 < ds_min:
                 if not jumped and len(pts) > 1:
@@ -718,6 +731,8 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         new["regular"] = not (secant or arm)
         if arm:   # the turn is at the unstable arm's last orbit, to within the last step tried past it
             found = [_special("nonsmooth-fold", pts[-1], len(pts) - 1)]
+        elif gap:   # nothing is located inside (no orbit was found there): the gap itself is the special point
+            found = [_special("gap", new, len(pts) - 1, bracket=_field_bracket(X, X_new, span))]
         else:
             found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol,
                                before=pts[-2] if len(pts) > 1 else None)
@@ -777,14 +792,14 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
                 landing = None
         if new["regular"]:
             shots = True
-        if secant and ahead:
-            h = max(h, 4 * ds_min)   # past the kink: steps grow again from there
+        if secant and (ahead or gap):
+            h = max(h, 4 * ds_min)   # past the kink (the gap): steps grow again from there
         ahead = False
         if off_circle and T_new[-1] * T[-1] < 0:
             found = [replace(q, kind="nonsmooth-fold") if _at_kink(q) else q for q in found]
         jumped = False
         if new["regular"]:
-            switched = False   # a turn further on may be reached from its unstable side too
+            switched = gap_tried = False   # a turn (a gap) further on may be reached from its unstable side too
         for q in found:
             if isinstance(q, PendingPoint):
                 q.start()
@@ -826,6 +841,24 @@ def _multiplier_step(h, taken, mu_before, mu_after, ds_min) -> float:
     if change <= 0.0:
         return h
     return max(min(h, MULTIPLIER_STEP * taken / change), min(h, 4 * ds_min))
+
+
+def _across_gap(ctx, pts, X, mode):
+    """An orbit past a stretch where the continuation found none, by shooting at fixed values of the field
+    :data:`GAP_REACH` of the range on from the last orbit ``X`` (the way of the last step), from its state:
+    ``(X, mode, A)`` or ``(None, mode, None)``.
+
+    The integrator's discrete flow can lack orbits over a stretch of the field (a phase
+    born inside a step, whose orbits the shooting stalls on) that moves with the step; the
+    bilinear 24-blade ring at 1000 steps a period has none from 290.85 to 290.90 rad/s
+    (shooting from the last orbit stalls at residuals of 2e-4 to 5e-4) and has them from
+    290.95 on. The orbits either side of such a gap may lie on different branches: a fold
+    or a turn inside it is not seen.
+    """
+    travel = X - np.append(pts[-2]["state"] / ctx.scale, pts[-2]["param"] / ctx.span)
+    if not abs(travel[-1]) > 1e-3 * np.linalg.norm(travel):
+        return None, mode, None
+    return _shoot_ahead(ctx, X, np.sign(travel[-1]), mode, fractions=GAP_REACH)
 
 
 def _passed(ctx, pts, X, reach) -> bool:
@@ -992,6 +1025,9 @@ COLUMN_ACCURACY = 1e-2
 #: The most the leading Floquet multiplier's modulus may change from one branch point to the next, estimated from
 #: the last step (:func:`_multiplier_step`): windows of instability narrower than a step are resolved.
 MULTIPLIER_STEP = 0.1
+#: How far past the last orbit (fractions of the range) a branch stalled at the shortest step shoots for an orbit
+#: beyond a gap of the discrete flow (:func:`_across_gap`).
+GAP_REACH = (3e-3, 1e-2, 3e-2)
 #: Regular steps after a fixed-value shot during which a step that runs back in the field with no fold sends the
 #: branch back to before the shot.
 LANDING_WATCH = 3
@@ -1718,7 +1754,7 @@ def _special(kind: str, point: dict, index: int, multiplier=None, bracket=None) 
 
 def _off_circle(p: SpecialPoint) -> bool:
     """A fold, period doubling or Neimark-Sacker point whose critical multiplier is not on the unit circle."""
-    return p.kind not in ("grazing", "border-collision") and abs(abs(p.multiplier) - 1.0) > 0.05
+    return p.kind not in ("grazing", "border-collision", "gap") and abs(abs(p.multiplier) - 1.0) > 0.05
 
 
 def _at_kink(p) -> bool:

@@ -8,7 +8,8 @@ from matplotlib.figure import Figure
 #: Marker of each kind of special point.
 MARKERS = {"fold": ("s", "fold"), "period-doubling": ("D", "period doubling"),
            "neimark-sacker": ("^", "Neimark-Sacker"), "grazing": ("o", "grazing"),
-           "nonsmooth-fold": ("P", "nonsmooth fold"), "border-collision": ("X", "border collision")}
+           "nonsmooth-fold": ("P", "nonsmooth fold"), "border-collision": ("X", "border collision"),
+           "gap": ("*", "gap (no orbit found)")}
 
 
 def _between(value, x, y, k):
