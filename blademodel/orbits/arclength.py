@@ -66,7 +66,8 @@ class SpecialPoint:
         where the step fell below ``ds_min``; the branch goes on from the first orbit that
         shooting at fixed values past the stall found from the last one (the integrator's
         discrete flow can lack orbits over a short stretch, which moves with the step: more
-        steps a period may close it; the orbits either side may lie on different branches);
+        steps a period may close it; the orbits either side may lie on different branches;
+        ``multiplier`` is the largest of the orbit past it);
         ``"nonsmooth-fold"``: the branch turns back at a kink of the map (a grazing), its
         stability changing with no multiplier on the unit circle (one jumps across it);
         located only to within the last step across the kink; or ``"border-collision"``:
@@ -799,7 +800,8 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             found = [replace(q, kind="nonsmooth-fold") if _at_kink(q) else q for q in found]
         jumped = False
         if new["regular"]:
-            switched = gap_tried = False   # a turn (a gap) further on may be reached from its unstable side too
+            # a turn further on may be reached from its unstable side too, and another gap may follow
+            switched = gap_tried = False
         for q in found:
             if isinstance(q, PendingPoint):
                 q.start()
@@ -848,9 +850,9 @@ def _across_gap(ctx, pts, X, mode):
     :data:`GAP_REACH` of the range on from the last orbit ``X`` (the way of the last step), from its state:
     ``(X, mode, A)`` or ``(None, mode, None)``.
 
-    The integrator's discrete flow can lack orbits over a stretch of the field (a phase
-    born inside a step, whose orbits the shooting stalls on) that moves with the step; the
-    bilinear 24-blade ring at 1000 steps a period has none from 290.85 to 290.90 rad/s
+    The integrator's discrete flow can lack orbits over a stretch of the field, which moves
+    with the step (as at 305.78 rad/s on the Coulomb pair, where a phase is seen only once it
+    spans a step end); the bilinear 24-blade ring at 1000 steps a period has none from 290.85 to 290.90 rad/s
     (shooting from the last orbit stalls at residuals of 2e-4 to 5e-4) and has them from
     290.95 on. The orbits either side of such a gap may lie on different branches: a fold
     or a turn inside it is not seen.
