@@ -687,7 +687,7 @@ def test_a_branch_goes_on_across_a_stretch_with_no_orbit_and_reports_the_gap(mon
     and every shot is made to fail between 255.0 and 255.2 rad/s on the bilinear pair: the branch now goes on from
     the first orbit that shooting farther on finds, reports a ``gap`` whose bracket holds the stretch, and its points
     past the gap are the branch's orbits there (shooting from the unpatched branch's nearest orbits at the same
-    values). The command says so."""
+    values). The command says so, and the plot draws no line across the gap."""
     from blademodel.orbits import arclength as al
     from blademodel.orbits.period_map import FlowError
     cfg = BladePair(friction="bilinear")
@@ -728,3 +728,8 @@ def test_a_branch_goes_on_across_a_stretch_with_no_orbit_and_reports_the_gap(mon
     model = str(Path(__file__).resolve().parents[1] / "models" / "blade_pair_bilinear.yaml")
     assert main(["continue", model, "--param", "omega", "--from", "250", "--to", "260"]) == 0
     assert f"gap: no orbit found between omega = {lo:.8g} and {hi:.8g}" in capsys.readouterr().out
+    from blademodel.plots.branch import branch_figure
+    lines = branch_figure(b).axes[0].lines
+    across = [ln for ln in lines
+              if len(ln.get_xdata()) == 2 and min(ln.get_xdata()) <= lo and max(ln.get_xdata()) >= hi]
+    assert not across and any(ln.get_marker() == "*" for ln in lines)   # no line drawn across the gap; it is marked

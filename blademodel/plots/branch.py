@@ -60,8 +60,11 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
         y = curves[0]
         x = b.params
         stable = b.stable
+        gaps = {p.index for p in b.special if p.kind == "gap"}   # no orbit was found there: no line
         for yc in curves:
             for k in range(len(x) - 1):   # each segment drawn as its end points' stability: solid or dashed
+                if k in gaps:
+                    continue
                 both = stable[k] and stable[k + 1]
                 ax.plot(x[k:k + 2], yc[k:k + 2], "-" if both else "--", color=c_stable if both else c_unstable,
                         lw=1.6)
