@@ -13,16 +13,16 @@ orbit, the field by the continuation range).
   saltation matrices, replaying the run the last residual made) where the kernel has
   one, else central differences; the field's column is a forward difference of the map,
   or, on a smooth stretch, from the tangent of the last points (:meth:`_Context.column_rule`).
-* **Prediction**: on a smooth stretch, the quadratic through the last three points and
-  the Jacobian extrapolated from the last two; else the tangent step and the last
-  Jacobian.
+* **Prediction**: on a smooth stretch, the quadratic through the last three points, for
+  the unknowns and the Jacobian alike; else the tangent step and the last Jacobian.
 * **Correction**: Broyden's method from that matrix (residuals only), steps halved where
   the residual does not fall (a kink of the map, where an event appears), then Newton
   with fresh Jacobians, then shooting at the predicted value of the field.
 * **Parameters**: each value of the field gets the first integrator with its parameters
   changed, interpolated along the field's path where it moves them affinely
   (:mod:`.field_path`).
-* The step grows after easy corrections and is halved after hard or failed ones.
+* The step grows after easy corrections and is halved after hard or failed ones; it is
+  kept short where the leading multiplier moves fast (:func:`_multiplier_step`).
 
 Each point carries its Floquet multipliers and its orbit's events (their signature: which
 transitions, how often). A change in the number of multipliers outside the unit circle
@@ -683,10 +683,8 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             # The way on is the secant's (the tangent from difference quotients that straddle the
             # kink can point anywhere: there its field component was -0.003 on a rising branch)
             ahead = True
-            travel = X - np.append(pts[-2]["state"] / ctx.scale, pts[-2]["param"] / span)
-            if abs(travel[-1]) > 1e-3 * np.linalg.norm(travel):
-                X_new, m_new, A_new = _shoot_ahead(ctx, X, np.sign(travel[-1]), m)
-                secant = X_new is not None
+            X_new, m_new, A_new = _shoot_along_secant(ctx, pts, X, m)
+            secant = X_new is not None
         arm = False
         if X_new is None and h / 2 < ds_min and jumped and not switched and pts[-1]["unstable"]:
             # even the jump failed, on an unstable arm: a turn reached from its unstable side (a
@@ -694,13 +692,13 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             switched = True
             X_new, m_new, A_new = _other_arm(ctx, pts, X, m, ds_max)
             arm = X_new is not None
-        gap = X_new is None and h / 2 < ds_min and jumped and shots and not gap_tried and len(pts) > 1
-        if gap:
+        gap = False
+        if X_new is None and h / 2 < ds_min and jumped and shots and not gap_tried and len(pts) > 1:
             # everything else failed at the shortest step: the discrete flow may have no orbit over a
-            # stretch (the bilinear 24-blade ring from 290.847 to about 290.93 rad/s at 1000 steps a
-            # period); shooting farther on, from the last orbit, may find the branch past it
+            # stretch (the bilinear 24-blade ring from 290.85 to 290.90 rad/s at 1000 steps a period, and
+            # orbits from 290.95 on); shooting farther on, from the last orbit, may find the branch past it
             gap_tried = True
-            X_new, m_new, A_new = _across_gap(ctx, pts, X, m)
+            X_new, m_new, A_new = _shoot_along_secant(ctx, pts, X, m, GAP_REACH)
             gap = secant = X_new is not None
         if X_new is None:
             if h / 2 < ds_min:
@@ -708,7 +706,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
                     # halving brought the prediction ever closer to a kink of the map (a switching
                     # time passing the section), where the difference quotients, and so the tangent,
                     # straddle it: jump across along the secant of the last two points instead
-                    prev = np.append(pts[-2]["state"] / ctx.scale, pts[-2]["param"] / span)
+                    prev = ctx.unknowns(pts[-2])
                     if np.linalg.norm(X - prev) > 0:
                         T = (X - prev) / np.linalg.norm(X - prev)
                         A = None
@@ -845,29 +843,31 @@ def _multiplier_step(h, taken, mu_before, mu_after, ds_min) -> float:
     return max(min(h, MULTIPLIER_STEP * taken / change), min(h, 4 * ds_min))
 
 
-def _across_gap(ctx, pts, X, mode):
-    """An orbit past a stretch where the continuation found none, by shooting at fixed values of the field
-    :data:`GAP_REACH` of the range on from the last orbit ``X`` (the way of the last step), from its state:
-    ``(X, mode, A)`` or ``(None, mode, None)``.
+def _shoot_along_secant(ctx, pts, X, mode, fractions=None):
+    """:func:`_shoot_ahead` from the last orbit ``X`` the way the field went along the secant of the last two points
+    (``fractions`` of the range, its default where None): ``(X, mode, A)``, or ``(None, mode, None)`` also where
+    that secant does not move the field.
 
-    The integrator's discrete flow can lack orbits over a stretch of the field, which moves
-    with the step (as at 305.78 rad/s on the Coulomb pair, where a phase is seen only once it
-    spans a step end); the bilinear 24-blade ring at 1000 steps a period has none from 290.85 to 290.90 rad/s
-    (shooting from the last orbit stalls at residuals of 2e-4 to 5e-4) and has them from
-    290.95 on. The orbits either side of such a gap may lie on different branches: a fold
-    or a turn inside it is not seen.
+    Used past a kink of the map where the arclength corrections fail (short shots), and past
+    a gap of the discrete flow (:data:`GAP_REACH`): where no orbit lies over a stretch of the
+    field, which moves with the step (the Coulomb pair at 305.78 rad/s, where a phase is seen
+    only once it spans a step end; the bilinear 24-blade ring at 1000 steps a period from
+    290.85 to 290.90 rad/s). The orbits either side of a gap may lie on different branches:
+    a fold or a turn inside it is not seen.
     """
-    travel = X - np.append(pts[-2]["state"] / ctx.scale, pts[-2]["param"] / ctx.span)
+    travel = X - ctx.unknowns(pts[-2])
     if not abs(travel[-1]) > 1e-3 * np.linalg.norm(travel):
         return None, mode, None
-    return _shoot_ahead(ctx, X, np.sign(travel[-1]), mode, fractions=GAP_REACH)
+    if fractions is None:
+        return _shoot_ahead(ctx, X, np.sign(travel[-1]), mode)
+    return _shoot_ahead(ctx, X, np.sign(travel[-1]), mode, fractions=fractions)
 
 
 def _passed(ctx, pts, X, reach) -> bool:
     """Whether ``X`` lies within ``reach`` of one of the branch points ``pts`` (in the current scaling)."""
     if not pts:
         return False
-    P = np.array([np.append(q["state"] / ctx.scale, q["param"] / ctx.span) for q in pts])
+    P = np.array([ctx.unknowns(q) for q in pts])
     return bool(np.min(np.linalg.norm(P - X, axis=1)) <= reach)
 
 
@@ -978,13 +978,21 @@ def _other_arm(ctx, pts, X, mode, reach, fractions=(1e-5, 1e-4, 1e-3), displacem
                         accept=lambda X_new: ctx.events != last["events"] and np.linalg.norm(X_new - X) <= reach)
 
 
-def _end_tangent(points):
+def _chord(p, q) -> float:
+    """The distance from ``p`` to ``q``."""
+    d = q - p
+    return math.sqrt(float(np.dot(d, d)))
+
+
+def _end_tangent(points, chords=None):
     """The unit tangent at the last of ``points`` of the polynomial through them in their chord length (None where two
-    coincide): the derivative of its Lagrange form there."""
+    coincide): the derivative of its Lagrange form there. ``chords``: the distances between successive points, where
+    known (:func:`_chord`)."""
+    if chords is None:
+        chords = [_chord(p, q) for p, q in zip(points[:-1], points[1:])]
     s = [0.0]
-    for p, q in zip(points[:-1], points[1:]):
-        d = q - p
-        s.append(s[-1] + math.sqrt(float(np.dot(d, d))))
+    for c in chords:
+        s.append(s[-1] + c)
     s = [v - s[-1] for v in s]
     if any(b <= a for a, b in zip(s[:-1], s[1:])):
         return None
@@ -1028,7 +1036,7 @@ COLUMN_ACCURACY = 1e-2
 #: the last step (:func:`_multiplier_step`): windows of instability narrower than a step are resolved.
 MULTIPLIER_STEP = 0.1
 #: How far past the last orbit (fractions of the range) a branch stalled at the shortest step shoots for an orbit
-#: beyond a gap of the discrete flow (:func:`_across_gap`).
+#: beyond a gap of the discrete flow (:func:`_shoot_along_secant`).
 GAP_REACH = (3e-3, 1e-2, 3e-2)
 #: Regular steps after a fixed-value shot during which a step that runs back in the field with no fold sends the
 #: branch back to before the shot.
@@ -1272,7 +1280,7 @@ class _Context:
         if not (b.get("regular") and c.get("regular") and a["events"] == b["events"] == c["events"]
                 and _key(a["mode"]) == _key(b["mode"]) == _key(c["mode"])):
             return X + h * T, A
-        Xa, Xb = (np.append(q["state"] / self.scale, q["param"] / self.span) for q in (a, b))
+        Xa, Xb = (self.unknowns(q) for q in (a, b))
         d0, d1 = float(np.linalg.norm(Xb - Xa)), float(np.linalg.norm(X - Xb))
         if not (d0 > 0 and d1 > 0):
             return X + h * T, A
@@ -1288,17 +1296,16 @@ class _Context:
 
         On a smooth stretch (the last three points in one mode and with one event
         signature, the last two reached by regular steps), where the new point keeps that
-        mode and signature, the branch's tangent ``t`` at the new point is that of the
-        quadratic through the last two points and it, in their arclength, to second order
-        in the step. Along the branch the residual stays zero, ``A_y t_y + a t_lambda = 0``,
-        which gives the field's column ``a = -A_y t_y / t_lambda`` from the exact state
-        columns ``A_y``, without the integration at a shifted value of the field that the
-        difference quotient takes. The cubic through the last three points and the new one
-        gives the quadratic's error: where ``|t_cubic - t| / |t_lambda|`` exceeds
-        :data:`COLUMN_ACCURACY` (a bent stretch, or near a fold, where the division
-        magnifies the error) the rule returns None and the difference is taken; elsewhere
-        the column is taken from the cubic's tangent, one order better than the estimate
-        vouches for (as an embedded Runge-Kutta pair steps with its higher order). The column
+        mode and signature, the branch's tangent ``t`` at the new point is that of the cubic
+        through the last three points and it, in their arclength, to third order in the
+        step. Along the branch the residual stays zero, ``A_y t_y + a t_lambda = 0``, which
+        gives the field's column ``a = -A_y t_y / t_lambda`` from the exact state columns
+        ``A_y``, without the integration at a shifted value of the field that the difference
+        quotient takes. The quadratic through the last two points and the new one (second
+        order) estimates the error, as an embedded Runge-Kutta pair's lower order does: where
+        ``|t_cubic - t_quadratic| / |t_lambda|`` exceeds :data:`COLUMN_ACCURACY` (a bent
+        stretch, or near a fold, where the division magnifies the error) the rule returns
+        None and the difference is taken. The column
         only starts Broyden's method at the next point and orients the next tangent: the
         orbits are solved to ``tol`` and the multipliers come from the exact monodromy
         whatever it is. Returns ``column(X, mode, A_y)``, the column at the corrected
@@ -1310,19 +1317,25 @@ class _Context:
         if not (a.get("regular") and b.get("regular") and z["signature"] == a["signature"] == b["signature"]
                 and _key(z["mode"]) == _key(a["mode"]) == _key(b["mode"])):
             return None
-        before = [np.append(q["state"] / self.scale, q["param"] / self.span) for q in (z, a, b)]
+        before = [self.unknowns(q) for q in (z, a, b)]
+        chords = [_chord(p, q) for p, q in zip(before[:-1], before[1:])]
 
         def column(X, mode, A_y):
             if self.signature != b["signature"] or _key(mode) != _key(b["mode"]):
                 return None
-            t = _end_tangent(before[1:] + [X])
-            t_cubic = _end_tangent(before + [X])
+            last = chords + [_chord(before[-1], X)]
+            t = _end_tangent(before[1:] + [X], last[1:])
+            t_cubic = _end_tangent(before + [X], last)
             if t is None or t_cubic is None or \
                     np.linalg.norm(t_cubic - t) > COLUMN_ACCURACY * abs(t[-1]):
                 return None
             return -(A_y @ t_cubic[:-1]) / t_cubic[-1]
 
         return column
+
+    def unknowns(self, q):
+        """The scaled unknowns ``X`` (state, then field) of the branch point ``q`` in the current state scale."""
+        return np.append(q["state"] / self.scale, q["param"] / self.span)
 
     def _jacobian_of(self, q):
         """The scaled Jacobian of the branch point ``q`` in the current state scale."""
@@ -1442,7 +1455,7 @@ class _Context:
             if not (min(g0, g1, g2) > 0.0 or max(g0, g1, g2) < 0.0):
                 continue
             if d0 is None:   # (in floats: this runs at every step, numpy's polyfit cost a tenth of the branch)
-                X0 = np.append(before["state"] / self.scale, before["param"] / self.span)
+                X0 = self.unknowns(before)
                 d0, d1 = float(np.linalg.norm(Xa - X0)), float(np.linalg.norm(Xb - Xa))
             if not (d0 > 0.0 and d1 > 0.0):
                 return None
@@ -1652,7 +1665,8 @@ class _Context:
             if Xb is not None:
                 signature = self.signature
                 if bracket is not None:   # (solved to tol, the point may have moved just out of it: by 2e-10 rad/s)
-                    bracket = (min(bracket[0], float(Xb[-1] * self.span)), max(bracket[1], float(Xb[-1] * self.span)))
+                    value = float(Xb[-1] * self.span)
+                    bracket = (min(bracket[0], value), max(bracket[1], value))
             else:
                 # the trial, solved only to tell its side, is no orbit to tol: it may lie where none is (a gap of
                 # the discrete flow, from 305.7811 to 305.7831 rad/s on the Coulomb pair, where trials solved to
