@@ -733,3 +733,60 @@ def test_a_branch_goes_on_across_a_stretch_with_no_orbit_and_reports_the_gap(mon
     across = [ln for ln in lines
               if len(ln.get_xdata()) == 2 and min(ln.get_xdata()) <= lo and max(ln.get_xdata()) >= hi]
     assert not across and any(ln.get_marker() == "*" for ln in lines)   # no line drawn across the gap; it is marked
+
+
+def test_a_branch_that_turns_back_onto_itself_stops_and_says_so(monkeypatch):
+    """A wrong turn, made here by one correction (the 30th step's) returning the orbit of four steps back, with the
+    refusal of corrections onto the part passed off: the branch then retraces its points. Unchecked it ran back up
+    to the grazing at 279.806 rad/s, turned there and came down again, reporting that grazing three times; now it
+    stops within a few checks of the turn and says where it retraces what."""
+    from blademodel.orbits import arclength as al
+    correct = al._Context.correct
+    seen = []
+
+    def backwards(self, X, T, mode, A=None, *args, **kwargs):
+        out = correct(self, X, T, mode, A, *args, **kwargs)
+        if "column" not in kwargs or out[0] is None:   # only the steps' own corrections
+            return out
+        seen.append((out[0][:-1] * self.scale, out[0][-1] * self.span, out[1], out[2]))
+        if len(seen) == 30:
+            y, lam, m, A_old = seen[26]
+            return np.append(y / self.scale, lam / self.span), m, A_old
+        return out
+
+    monkeypatch.setattr(al._Context, "correct", backwards)
+    monkeypatch.setattr(al, "_passed", lambda *args: False)
+    b = continuation(BladePair(friction="bilinear"), "omega", 280.0, 270.0, ds_max=0.02, max_points=200, workers=1)
+    assert b.message.startswith("the branch turned back onto itself")
+    k = int(b.message.split("from its point ")[1].split(" ")[0])
+    assert 30 < k and b.params.size <= 30 + 4 * 4
+    assert np.all(np.diff(b.params[k:]) > 0)   # running back up, over points already found
+    assert min(abs(b.params[k:, None] - b.params[None, :28]).min(axis=1)) < 0.05
+    assert [q.param for q in b.special if q.kind == "grazing"] == pytest.approx([279.806], abs=1e-3)
+
+
+def test_a_branch_that_comes_round_onto_itself_stops_and_says_so(monkeypatch):
+    """A closed branch, made here by one prediction (the 40th) landing on the 6th point with the step's direction
+    kept: the branch then goes over its points again, the same way. It stops within a few checks and says from
+    which point it repeats which."""
+    from blademodel.orbits import arclength as al
+    predict = al._Context.predict
+    seen = []
+
+    def looping(self, pts, X, T, A, h):
+        seen.append(len(pts))
+        if len(seen) == 40:
+            return self.unknowns(pts[5]), self._jacobian_of(pts[5])
+        return predict(self, pts, X, T, A, h)
+
+    cfg = BladePair(friction="bilinear")
+    plain = continuation(cfg, "omega", 280.0, 270.0, ds_max=0.02, max_points=200, workers=1)
+    monkeypatch.setattr(al._Context, "predict", looping)
+    b = continuation(cfg, "omega", 280.0, 270.0, ds_max=0.02, max_points=200, workers=1)
+    assert plain.message == "reached omega = 270"
+    assert b.message.startswith("the branch came round onto itself") and "from its points 5 to 6" in b.message
+    assert 40 < b.params.size <= 40 + 3 * 4
+    k = seen[39]   # the point the prediction landed on is the 6th found again; the points after it lie among theirs
+    assert b.params[k] == pytest.approx(plain.params[5], abs=1e-9)
+    np.testing.assert_allclose(b.states[k], plain.states[5], rtol=1e-6, atol=1e-9 * np.abs(plain.states).max())
+    assert np.all((b.params[k + 1:] < plain.params[5]) & (b.params[k + 1:] > plain.params[5 + b.params.size - k]))

@@ -23,6 +23,8 @@ orbit, the field by the continuation range).
   (:mod:`.field_path`).
 * The step grows after easy corrections and is halved after hard or failed ones; it is
   kept short where the leading multiplier moves fast (:func:`_multiplier_step`).
+* A branch whose new points lie on the part it has passed (a retrace after a wrong turn, or
+  a closed branch come round) stops and says from where (:mod:`.self_overlap`).
 
 Each point carries its Floquet multipliers and its orbit's events (their signature: which
 transitions, how often). A change in the number of multipliers outside the unit circle
@@ -49,6 +51,7 @@ from ..numeric.blas_threads import blas_threads_for
 from .background import Locator, PendingPoint, resolve
 from .field_path import AffineFieldPath
 from .period_map import FlowError, PeriodMap, _copy, _key, kernel_mode, worker_count
+from .self_overlap import CHECK_EVERY, CHECKS, SelfOverlap
 from .shooting import (ShootingError, _n_coordinates, _orbit_samples, _same, _scale_of_excursions, _state_scale,
                        find_periodic_orbit)
 
@@ -335,7 +338,8 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         The field: ``"omega"`` for a forced-response curve, or ``"gamma"``, ``"F0"`` ...
     start, stop : float
         The range; the branch starts at ``start`` and ends when the field leaves the range
-        (it may turn back at folds in between).
+        (it may turn back at folds in between), or earlier where it cannot go on or runs onto
+        points it already has (a retrace, a closed branch): its ``message`` says which.
     periods : int
         Period of the orbits in excitation periods.
     guess, mode, transient
@@ -661,6 +665,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     jumped = ahead = switched = gap_tried = False
     shots = True        # fixed-value shots allowed (not on the retry of a step whose shot led onto a side arm)
     landing = None      # where the branch stood before its last fixed-value shot, while a reversal may undo it
+    overlap = SelfOverlap(ctx.n)
     while earlier + len(pts) < max_points:
         X_pred, A_pred = ctx.predict(pts, X, T, A, h)
         X_new, m_new, A_new = ctx.correct(X_pred, T, m, A_pred, column=ctx.column_rule(pts))
@@ -777,6 +782,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
                 if isinstance(q, PendingPoint) and q.future is not None:
                     q.future.cancel()   # a location not yet begun in the locator's thread is not wanted
             del pts[landing["points"]:]
+            overlap.truncate(len(pts))
             del special[landing["special"]:]
             X, T, A, m, h = landing["X"], landing["T"], landing["A"], landing["m"], landing["h"] / 2
             ctx.scale = landing["scale"]
@@ -821,9 +827,30 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             if bounds[1] in (lo, hi) and (lam > hi if bounds[1] == hi else lam < lo):
                 message = f"reached {name} = {bounds[1]:g}"
             break
+        if new["regular"] and (len(pts) - 1) % CHECK_EVERY == 0:
+            weights = np.append(ctx.scale, span)
+            overlap.sync(pts, weights)
+            way = overlap.verdict(len(pts) - 1, weights, taken)
+            if way is not None:
+                message = _on_itself(way, name, pts, overlap.first_on(len(pts) - 1), len(pts) - 1, earlier)
+                break
     else:
         message = f"stopped after max_points = {max_points} points at {name} = {X[-1] * span:.6g}"
     return message
+
+
+def _on_itself(way, name, pts, segment, k, earlier) -> str:
+    """Why a branch stopped whose points from about ``pts[k - (CHECKS - 1) * CHECK_EVERY]`` lie on its part already
+    passed, from its ``segment`` on, going ``way`` (``"back"`` or ``"round"``, :meth:`SelfOverlap.verdict`)."""
+    since = k - (CHECKS - 1) * CHECK_EVERY
+    first = f"its point {earlier + since} ({name} = {pts[since]['param']:.6g})"
+    onto = f"its points {earlier + segment} to {earlier + segment + 1} ({name} = {pts[segment]['param']:.6g})"
+    if way == "back":
+        return (f"the branch turned back onto itself: from {first} on it retraces the points it passed, from "
+                f"{onto} backwards (a wrong turn at a kink of the map, where the tangent is not defined; a shorter "
+                f"ds_max may take the turn right)")
+    return (f"the branch came round onto itself: from {first} on it goes over the points it passed, from {onto} "
+            f"onwards (a closed branch: an isola, or period-2 orbits between two period doublings)")
 
 
 def _multiplier_step(h, taken, mu_before, mu_after, ds_min) -> float:
