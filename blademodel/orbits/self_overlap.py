@@ -13,9 +13,9 @@ every :data:`CHECK_EVERY` points, measures how far the newest lies from the poly
 points before it (all but the last two segments), in the continuation's current scaling.
 A point *lies on* the part passed where that distance is at most :data:`NEAR` of the
 longer of the step just taken and the segment it lies on: the sagitta of an arc of the
-branch over a segment is a small fraction of the segment, while past a fold (smooth, where
-the arms part as fast as the branch moves, or at a kink, where they part at the kink's
-angle) a point lies about its distance from the turn away from the other arm. Only
+branch over a segment is a small fraction of the segment, while past a turn a point lies
+off the other arm by about its distance from the turn (a smooth fold, whose arms part as
+fast as the branch moves) or that distance times the angle between the arms (a kink). Only
 :data:`CHECKS` such points in a row, on segments that follow each other the same way, make
 the verdict: backwards, a retrace; forwards, a branch gone round. A kink whose arms part at
 less than about a hundredth of a radian would pass for a retrace (they lie within ``NEAR``
