@@ -42,6 +42,10 @@ def register(subparsers) -> argparse.ArgumentParser:
                         "inf reports each at the first point past it. Cheaper on mistuned rings, whose contacts "
                         "graze one by one; the branch's points stay the same")
     add_stepping_arguments(p)
+    p.add_argument("--cyclic", action="store_true",
+                   help="a tuned bladed disk under engine-order excitation: follow its travelling-wave orbits on "
+                        "the map over T / d reduced by their symmetry (d = N / gcd(EO, N); 8 times fewer steps on "
+                        "24 blades at engine order 3), the whole ring's multipliers from it (docs/orbits.md)")
     p.add_argument("--switch", action="store_true",
                    help="also follow the period-doubled branch born at each period doubling found "
                         "(saved beside --out as FILE_pd1.nc, ...; drawn on the same --plot)")
@@ -129,13 +133,18 @@ def run(args: argparse.Namespace) -> int:
         if not args.grazing_tol > 0:
             raise ValueError(f"--grazing-tol must be > 0 (or inf), got {args.grazing_tol}")
         run_settings["grazing_tol"] = args.grazing_tol
+    if args.cyclic:
+        if args.switch:
+            raise ValueError("--cyclic follows travelling waves of period 1: a period-doubled branch (--switch) "
+                             "needs the whole ring's map; drop one of them")
+        run_settings["cyclic"] = True   # (files written without it stay this command's own without it)
     shared = dict(max_points=args.max_points, ds_max=args.ds_max, tol=args.tol, grazing_tol=args.grazing_tol,
                   steps_per_period=args.steps_per_period, event_tol=args.event_tol, method=args.method,
                   jacobian=args.jacobian, workers=args.workers)
 
     def branch_of(resume, **kw):
         return continuation(config, args.param, args.start, args.stop, periods=args.period,
-                            transient=args.transient, resume=resume, **shared, **kw)
+                            transient=args.transient, resume=resume, cyclic=args.cyclic, **shared, **kw)
 
     try:
         branch = _continued(args.out, config, run_settings, "branch", args.param, branch_of)

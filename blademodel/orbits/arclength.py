@@ -221,6 +221,7 @@ class _Family:
         self._bounds = (min(bounds), max(bounds)) if bounds is not None else None
         self._path: AffineFieldPath | None = None
         self._probed = False
+        self.symmetry = None   # a tuned ring's CyclicSymmetry: the maps are then the reduced ones (.cyclic)
 
     def config_at(self, value: float):
         from ..config import apply_overrides
@@ -279,7 +280,8 @@ class _Family:
             if len(self._cache) > 8:
                 old = self._cache.pop(next(iter(self._cache)))
                 self._dropped = (self._dropped[0] + old.evaluations, self._dropped[1] + old.replays)
-            self._cache[key] = PeriodMap(self._integrator_at(key), self.periods, self.jacobian, self.workers)
+            self._cache[key] = PeriodMap(self._integrator_at(key), self.periods, self.jacobian, self.workers,
+                                         symmetry=self.symmetry)
         return self._cache[key]
 
     def state_names(self) -> list:
@@ -291,6 +293,7 @@ class _Family:
         its first integrator is built at this one's first value, so that both move from it alike."""
         twin = _Family(self.config, self.name, self.periods, self.settings, self.first_value, self.jacobian,
                        bounds=self._bounds, workers=1)
+        twin.symmetry = self.symmetry
         twin.map_at(self.first_value)
         return twin
 
@@ -327,7 +330,7 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
                  event_tol: float = 1e-10, method: str = "rk4", kernel: str = "auto", jacobian: str = "auto",
                  workers: int | None = None, progress: Callable[[int, float], None] | None = None,
                  checkpoint: Callable[[Branch], None] | None = None, checkpoint_every: float = 30.0,
-                 resume: Branch | None = None) -> Branch:
+                 resume: Branch | None = None, cyclic: bool = False) -> Branch:
     """Follow the periodic orbits of ``config`` as its field ``name`` goes from ``start`` toward ``stop``.
 
     Parameters
@@ -390,6 +393,12 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         of its last two points, and the branch returned holds its points, special
         points and cost before the new ones. The steps after it are not those the
         interrupted run would have taken (the step length starts again from ``ds``).
+    cyclic : bool
+        For a tuned bladed disk under engine-order excitation: follow its travelling-wave
+        orbits on the map reduced by their symmetry (:mod:`.cyclic`), over ``T / d`` of
+        the period (``d = N / gcd(EO, N)``: 8 on the 24-blade ring at engine order 3),
+        with the whole ring's multipliers from its Jacobian. The first orbit (from the
+        transient or the guess) must be a travelling wave. ``periods`` must be 1.
 
     Returns
     -------
@@ -401,7 +410,68 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         On Ctrl-C (a :class:`KeyboardInterrupt`), with the branch so far.
     ValueError
         If ``resume`` is not a branch of ``name`` with ``periods`` that lies in the range.
+    CyclicError
+        With ``cyclic``, for a model without the symmetry (naming the field that breaks
+        it), or a first orbit that is no travelling wave (a ``ValueError``).
     """
+    kwargs = dict(periods=periods, guess=guess, mode=mode, transient=transient, ds=ds, ds_min=ds_min, ds_max=ds_max,
+                  max_points=max_points, tol=tol, max_corrections=max_corrections, rel_step=rel_step,
+                  locate_tol=locate_tol, grazing_tol=grazing_tol, steps_per_period=steps_per_period,
+                  event_tol=event_tol, method=method, kernel=kernel, jacobian=jacobian, workers=workers,
+                  progress=progress, checkpoint=checkpoint, checkpoint_every=checkpoint_every)
+    if not cyclic:
+        return _segment(config, name, start, stop, resume=resume, cyclic=False, **kwargs)
+    return _cyclic_branch(config, name, start, stop, resume, kwargs)
+
+
+#: Points the whole period's map takes past a stall of the cyclic reduction before the reduced map goes on.
+CYCLIC_FALLBACK_POINTS = 10
+
+
+def _cyclic_branch(config, name, start, stop, resume, kwargs) -> Branch:
+    """:func:`continuation` with ``cyclic``: on the reduced map, and where that stalls, on the whole period's for
+    :data:`CYCLIC_FALLBACK_POINTS` points, then on the reduced map again (each part resuming the last).
+
+    The reduced map's section sees every contact's switching times modulo ``T / d``, not
+    ``T``: ``d`` times as many pass it as the whole map's, and where one does the map has a
+    kink that the per-contact kernel's start (no ``settle``) cannot always be shot across
+    (measured on the tuned 24-blade ring at 292.725 rad/s, events ``1.7e-9 T / 8`` after the
+    section, where the whole map's branch steps over it). Where the whole map stalls too, or
+    the orbit past the stall is no travelling wave, the whole map finishes the branch.
+    """
+    from .cyclic import CyclicError
+    max_points = kwargs["max_points"]
+    b = resume
+    cyclic = True
+    while True:
+        if b is not None:   # a part after the first goes on from the last orbit, not from a transient
+            kwargs = {**kwargs, "transient": 0}
+        if cyclic:
+            try:
+                b = _segment(config, name, start, stop, resume=b, cyclic=True, **kwargs)
+            except CyclicError:
+                if b is None:
+                    raise
+                cyclic = False   # the orbit past the stall broke the symmetry: the whole map from here on
+                continue
+            if not b.message.startswith(STALLED) or b.params.size >= max_points:
+                return b
+            cyclic = False
+            limit = min(b.params.size + CYCLIC_FALLBACK_POINTS, max_points)
+        else:
+            limit = max_points
+        before = b.params.size
+        b = _segment(config, name, start, stop, resume=b, cyclic=False, **{**kwargs, "max_points": limit})
+        if limit == max_points or b.message.startswith(STALLED) or b.params.size <= before:
+            return b
+        cyclic = True
+
+
+def _segment(config, name: str, start: float, stop: float, *, periods, guess, mode, transient, ds, ds_min, ds_max,
+             max_points, tol, max_corrections, rel_step, locate_tol, grazing_tol, steps_per_period, event_tol,
+             method, kernel, jacobian, workers, progress, checkpoint, checkpoint_every, resume,
+             cyclic) -> Branch:
+    """:func:`continuation`, on the reduced map throughout where ``cyclic``."""
     settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
     _check_grazing_tol(grazing_tol)
     span = abs(stop - start)
@@ -414,6 +484,12 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         at, guess = float(resume.params[-1]), resume.states[-1]
     fam = _Family(config, name, periods, settings, at, jacobian, bounds=(start, stop), workers=workers)
     P0 = fam.map_at(at)
+    if cyclic:
+        from .cyclic import CyclicError, CyclicSymmetry
+        if periods != 1:
+            raise CyclicError(f"the cyclic reduction maps one period's orbits only, not periods = {periods}")
+        fam.symmetry = CyclicSymmetry(fam.config_at(at), P0.integrator)
+        fam._cache.clear()   # the maps from here on are the reduced ones
     if resume is not None:
         mode = _last_mode(resume, P0.integrator)
     try:
@@ -428,6 +504,8 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
     # scaled unknowns X = (y / scale, lambda / span)
     X = np.append(first.state / scale, at / span)
     m = first.mode
+    if cyclic:
+        X, m = _travelling_wave(ctx, X, m, name, at)
     A = ctx.jacobian(X, m)
     if resume is not None and resume.params.size > 1:   # onward along the secant of its last two points
         T = _tangent(A, X - np.append(resume.states[-2] / scale, resume.params[-2] / span))
@@ -437,6 +515,26 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         return _run(ctx, [ctx.point(X, m, A)], X, T, m, A, (start, stop), ds=ds, ds_min=ds_min, ds_max=ds_max,
                     max_points=max_points, locate_tol=locate_tol, progress=progress, checkpoint=checkpoint,
                     checkpoint_every=checkpoint_every, before=resume)
+
+
+def _travelling_wave(ctx, X, mode, name, at):
+    """The first orbit ``(X, mode)``, found on the whole period's map, solved again on the reduced one (it must be
+    a travelling wave: its residual there within ``1e-6``).
+
+    Raises
+    ------
+    CyclicError
+        Where it is not one.
+    """
+    from .cyclic import CyclicError
+    r, _ = ctx.residual(X, mode)
+    off = float(np.max(np.abs(r)))
+    Xc, mc, _ = ctx.correct_at_value(X, mode, jacobian=False) if off <= 1e-6 else (None, mode, None)
+    if Xc is None:
+        raise CyclicError(f"the first orbit at {name} = {at:g} is no travelling wave: turned by the symmetry it is "
+                          f"{off:.3g} (scaled) from itself; start where the ring's orbit is one (another start, "
+                          f"guess or transient), or continue without the cyclic reduction")
+    return Xc, mc
 
 
 def _check_grazing_tol(grazing_tol) -> None:
@@ -615,7 +713,8 @@ def _assemble(ctx, pts, special, message: str, before: Branch | None, complete: 
                states=np.array([p["state"] for p in pts]), multipliers=np.array([p["mu"] for p in pts]),
                stable=np.array([p["stable"] for p in pts], dtype=bool),
                amplitudes=np.array([p["amp"] for p in pts]), harmonics=np.array([p["h1"] for p in pts]),
-               events=np.array([p["events"] for p in pts], dtype=np.int64),
+               events=np.array([p["events"] for p in pts], dtype=np.int64) * (fam.symmetry.fraction if fam.symmetry
+                                                                               else 1),
                residuals=np.array([p["residual"] for p in pts]),
                sections=np.array([p["sections"] for p in pts]), special=list(special),
                state_names=fam.state_names()[:ctx.n], message=message, integrations=integrations,
@@ -898,6 +997,10 @@ def _passed(ctx, pts, X, reach) -> bool:
     return bool(np.min(np.linalg.norm(P - X, axis=1)) <= reach)
 
 
+#: How the message of a branch that stopped where its step fell below ``ds_min`` begins.
+STALLED = "the step fell below ds_min"
+
+
 def _stalled(ds_min, name, value, why, steps_per_period) -> str:
     """Why a branch stopped where its step fell below ``ds_min``, with what may get it through.
 
@@ -907,7 +1010,7 @@ def _stalled(ds_min, name, value, why, steps_per_period) -> str:
     run from 290.8 to 290.95 stops at 290.936 instead); the Coulomb pair has such a gap at
     305.78 rad/s.
     """
-    return (f"the step fell below ds_min = {ds_min:g} at {name} = {value:.6g}: {why} (the integrator's discrete "
+    return (f"{STALLED} = {ds_min:g} at {name} = {value:.6g}: {why} (the integrator's discrete "
             f"flow may lack orbits over a short stretch, which moves with the step: more steps a period, "
             f"steps_per_period (--steps-per-period) {2 * steps_per_period} instead of {steps_per_period}, may get "
             f"through)")
@@ -1374,7 +1477,13 @@ class _Context:
 
     def multipliers(self, A):
         """Floquet multipliers from the scaled Jacobian ``A``, largest modulus first."""
-        return _largest_first(np.linalg.eigvals(self._physical(A)))
+        return self._multipliers_of(self._physical(A))
+
+    def _multipliers_of(self, J):
+        """The orbit's Floquet multipliers from its map's Jacobian ``J`` (physical units), largest modulus first:
+        ``J``'s eigenvalues, or with a cyclic reduction those of the whole period's monodromy it gives."""
+        sym = self.fam.symmetry
+        return _largest_first(np.linalg.eigvals(J if sym is None else sym.monodromy(J)))
 
     def _physical(self, A):
         """The monodromy matrix in physical units from the scaled Jacobian ``A``."""
@@ -1385,7 +1494,7 @@ class _Context:
         """The branch point's record from its scaled unknowns and Jacobian."""
         n = self.n
         J = self._physical(A)   # kept in physical units: the scale changes from point to point
-        mu = _largest_first(np.linalg.eigvals(J))
+        mu = self._multipliers_of(J)
         lam = X[-1] * self.span
         P = self.fam.map_at(lam)
         y = X[:-1] * self.scale
@@ -1395,7 +1504,7 @@ class _Context:
         top, bottom = Y.max(axis=0), Y.min(axis=0)
         amp = 0.5 * (top - bottom)
         c = dft_bin(Y[:-1], self.fam.periods) * 2.0 / (Y.shape[0] - 1)
-        S = P.integrator.steps_per_period
+        S = (Y.shape[0] - 1) // self.fam.periods
         return {"param": lam, "state": y, "sections": Y[:-1:S].copy(), "mu": mu, "stable": bool(np.max(np.abs(mu)) < 1.0), "amp": amp,
                 "h1": c, "unstable": _unstable_count(mu), "X": X.copy(), "mode": _copy(mode), "A": A, "Y": Y,
                 "events": r.events, "signature": r.signature(), "regular": True, "residual": residual,

@@ -48,6 +48,9 @@ class MapRun:
         Events crossed.
     modes : ndarray or None
         The per-contact kernel's contact modes at every step (None for the product-mode kernel).
+    anonymous : bool
+        The contacts are all alike (a run of a map reduced by a ring's symmetry): the
+        signature leaves out which contact an event was at.
     """
 
     start: np.ndarray
@@ -62,6 +65,7 @@ class MapRun:
     n_log: int
     events: int
     modes: np.ndarray | None = None
+    anonymous: bool = False
     _signature: tuple | None = field(default=None, repr=False)
 
     def signature(self) -> tuple:
@@ -72,10 +76,13 @@ class MapRun:
         signature differs has crossed a grazing (a phase that appears or vanishes adds or
         removes transitions), even where the number of events is the same (one phase that
         appears and another that vanishes). Where a switching time passes the section the
-        sequence only turns round, and the multiset stays.
+        sequence only turns round, and the multiset stays. On a map reduced by a ring's
+        symmetry (``anonymous``) a switching time that passes the section of ``T / d`` hands
+        an event from one contact to another, alike: there the contacts are left out.
         """
         if self._signature is None:   # sorted tuples: a few microseconds for the pair's dozen events
-            self._signature = tuple(sorted(zip(*(c[:self.n_log].tolist() for c in self.log[1:]))))
+            columns = self.log[2:] if self.anonymous else self.log[1:]
+            self._signature = tuple(sorted(zip(*(c[:self.n_log].tolist() for c in columns))))
         return self._signature
 
 
@@ -112,13 +119,21 @@ class PeriodMap:
         ``None`` or ``-1`` for every CPU this process may use, ``1`` for none; used
         where a column takes at least :attr:`thread_column_seconds`. The Jacobian is
         the same to the bit whatever the number.
+    symmetry : CyclicSymmetry, optional
+        A tuned ring's travelling-wave symmetry (:mod:`.cyclic`): the map is then the
+        reduced one, ``G(y) = S^s Phi(0 -> T / d)(y)``, integrated over a ``d``-th of the
+        period (``periods`` must be 1), its Jacobian ``S^s dPhi``; the runs' ``Y`` is the
+        orbit over the whole period rebuilt from the reduced run (their ``t``, ``states``,
+        ``modes`` and ``log`` are the reduced run's). ``integrator`` stays the whole
+        period's; the map integrates with a copy over ``T / d``.
     """
 
     #: A Jacobian by differences is shared among threads only where one column (two integrations) takes at
     #: least this long (s): on the pair (0.6 ms a column) a thread pool costs more than it saves.
     thread_column_seconds = 2e-3
 
-    def __init__(self, integrator, periods: int = 1, jacobian: str = "auto", workers: int | None = None):
+    def __init__(self, integrator, periods: int = 1, jacobian: str = "auto", workers: int | None = None,
+                 symmetry=None):
         if int(periods) < 1:
             raise ValueError(f"periods must be a whole number >= 1, got {periods!r}")
         if jacobian not in JACOBIAN_METHODS:
@@ -128,6 +143,10 @@ class PeriodMap:
         if jacobian == "tangent" and kernel not in ("product", "contact"):
             raise ValueError(f"jacobian = 'tangent' needs one of blademodel's kernels, not {type(integrator).__name__}")
         self.integrator = integrator
+        self.symmetry = symmetry
+        if symmetry is not None and int(periods) != 1:
+            raise ValueError(f"the cyclic reduction maps one period's orbits only, not periods = {periods!r}")
+        self._ig = integrator if symmetry is None else symmetry.reduced(integrator)   # the one that integrates
         self.periods = int(periods)
         self.n = integrator.n_physical
         self.evaluations = 0   # integrations of the map (each over ``periods`` excitation periods)
@@ -148,7 +167,7 @@ class PeriodMap:
         FlowError
             If the integration stopped early.
         """
-        ig = self.integrator
+        ig = self._ig
         y = np.asarray(y, dtype=float)
         key = (y[:self.n].tobytes(), _key(mode))
         if self._last is not None and self._last[0] == key:
@@ -171,9 +190,14 @@ class PeriodMap:
                 break
             self._log_size = int(counters[C_LOGGED]) + 16
         self.evaluations += 1
-        r = MapRun(start=start, mode=m0, fired=fired, end=full, mode_end=mode_end, t=rec[0], Y=rec[1][:, :self.n],
+        Y = rec[1][:, :self.n]
+        if self.symmetry is not None:   # G(y) = S^s Phi(y); the orbit over the whole period from the reduced run's
+            full[:self.n] = self.symmetry.turned(full)
+            mode_end = self.symmetry.turned_modes(mode_end)
+            Y = self.symmetry.whole_period(Y)
+        r = MapRun(start=start, mode=m0, fired=fired, end=full, mode_end=mode_end, t=rec[0], Y=Y,
                    states=rec[1], log=log, n_log=int(counters[C_LOGGED]), events=int(counters[C_EVENTS]),
-                   modes=rec[2] if len(rec) > 2 else None)
+                   modes=rec[2] if len(rec) > 2 else None, anonymous=self.symmetry is not None)
         self._last = (key, r)
         return r
 
@@ -213,7 +237,7 @@ class PeriodMap:
             for any ``dp``: its tangent is in the state only).
         """
         from ..numeric.tangent import FlowSensitivity, SensitivityError, flow_sensitivity, settle_jacobian
-        ig = self.integrator
+        ig = self._ig
         contact = ig.kernel == "contact"
         if contact and dp is not None:
             raise SensitivityError("parameter derivatives by the tangent need the product-mode kernel")
@@ -227,6 +251,8 @@ class PeriodMap:
             if self._contact_tangent is None:
                 self._contact_tangent = ContactTangent(ig)
             M = self._contact_tangent.monodromy(r.t, r.states, r.modes, r.log, r.n_log)   # or ContactTangentError
+            if self.symmetry is not None:
+                M = self.symmetry.jacobian(M)
             return FlowSensitivity(state=r.end[:self.n].copy(), mode=_copy(r.mode_end), monodromy=M, parameter=None,
                                    events=r.n_log)
         s = flow_sensitivity(ig, r.start[:self.n], r.mode, self.periods, dp=dp, dperiod=dperiod,
@@ -274,9 +300,15 @@ class PeriodMap:
 
     def plain(self, y, mode):
         """``P(y)`` alone: no record, no log, nothing kept (the runs of difference quotients)."""
-        Py = _plain_map(self.integrator, self.periods, y, mode)
+        Py = self._plain(self._ig, y, mode)
         self.evaluations += 1
         return Py
+
+    def _plain(self, ig, y, mode) -> np.ndarray:
+        """The map's value from ``(y, mode)`` by :func:`_plain_map` on ``ig`` (this map's integrator or a worker's
+        copy), turned where the map is reduced by a symmetry."""
+        Py = _plain_map(ig, self.periods, y, mode)
+        return Py if self.symmetry is None else self.symmetry.turned(Py)
 
     def differences(self, y, mode, scale, rel_step: float = 1e-6) -> np.ndarray:
         """``dP/dy`` by differences, column ``i`` with step ``rel_step * scale[i]`` (see :meth:`jacobian`).
@@ -302,22 +334,22 @@ class PeriodMap:
                 yp = y.copy()
                 yp[i] += d
                 if base is not None:
-                    J[:, i] = (_plain_map(ig, self.periods, yp, mode) - base) / d
+                    J[:, i] = (self._plain(ig, yp, mode) - base) / d
                     continue
                 ym = y.copy()
                 ym[i] -= d
-                J[:, i] = (_plain_map(ig, self.periods, yp, mode) - _plain_map(ig, self.periods, ym, mode)) / (2.0 * d)
+                J[:, i] = (self._plain(ig, yp, mode) - self._plain(ig, ym, mode)) / (2.0 * d)
 
         t0 = time.perf_counter()
-        columns(self.integrator, range(1))
+        columns(self._ig, range(1))
         w = min(self.workers, self.n - 1)
         if w <= 1 or time.perf_counter() - t0 < self.thread_column_seconds:
-            columns(self.integrator, range(1, self.n))
+            columns(self._ig, range(1, self.n))
         else:
             from concurrent.futures import ThreadPoolExecutor
             with ThreadPoolExecutor(max_workers=w) as pool:
                 # round robin: columns of neighbouring states cost alike, so each thread gets its share
-                jobs = [pool.submit(columns, self.integrator.worker(), range(1 + k, self.n, w)) for k in range(w)]
+                jobs = [pool.submit(columns, self._ig.worker(), range(1 + k, self.n, w)) for k in range(w)]
                 try:
                     for job in jobs:
                         job.result()   # re-raises a worker's FlowError here

@@ -1,0 +1,164 @@
+"""The cyclic reduction of a tuned bladed disk: its travelling-wave orbits from a fraction of the period.
+
+Checked against the whole ring's period map (its orbit, its run over the period, its
+monodromy from the replayed tangent) and against difference quotients of the reduced
+map; a continuation on the reduced map against the whole map's orbits and bifurcations.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from blademodel.config import BladedDisk, apply_overrides, load_config
+from blademodel.numeric.kernels import make_integrator
+from blademodel.orbits import continuation, find_periodic_orbit
+from blademodel.orbits.cyclic import CyclicError, CyclicSymmetry
+from blademodel.orbits.period_map import PeriodMap
+MODELS = Path(__file__).resolve().parents[1] / "models"
+SPP = 600
+
+
+@pytest.mark.parametrize("friction, blades, engine_order, fraction, turn", [
+    ("coulomb", 8, 3, 8, 3),    # T / 8, the ring turned by 3 blades (3 EO = 1 mod 8)
+    ("bilinear", 6, 2, 3, 1),   # T / 3 (gcd 2), by 1 blade; the Jenkins sliders' states turn with their contacts
+])
+def test_the_reduced_map_gives_the_ring_s_orbit_its_run_over_the_period_and_its_monodromy(friction, blades,
+                                                                                          engine_order, fraction,
+                                                                                          turn):
+    """The travelling-wave orbit that shooting finds on the whole ring's map is a fixed point of the reduced map;
+    the reduced run rebuilds the whole period's; ``S^(-s d) J^d`` from the reduced map's tangent is the whole map's
+    monodromy (the replayed tangents of two integrations, over ``T`` and over ``T / d``, in different
+    roundings); the reduced map's tangent equals its difference quotients. Without the turn the reduced map does
+    not hold the orbit."""
+    cfg = BladedDisk(blades=blades, engine_order=engine_order, friction=friction, omega=286.0)
+    model = cfg.build()
+    ig = make_integrator(model, steps_per_period=SPP)
+    sym = CyclicSymmetry(cfg, ig)
+    assert (sym.fraction, sym.turn) == (fraction, turn)
+    orbit = find_periodic_orbit(model, integrator=ig, transient=50, jacobian="forward", workers=1)
+    y, cm, size = orbit.state, orbit.mode, np.max(np.abs(orbit.state))
+    whole, reduced = PeriodMap(ig, 1), PeriodMap(ig, 1, symmetry=sym)
+    z, cz = reduced(y, cm.copy())
+    assert np.max(np.abs(z - y)) <= 1e-10 * size and np.array_equal(cz, cm)
+    unturned = reduced.run(y, cm.copy()).states[-1][:y.size]
+    assert np.max(np.abs(unturned - y)) > 1e-3 * size
+    rw, rr = whole.run(y, cm.copy()), reduced.run(y, cm.copy())
+    assert rr.Y.shape == rw.Y.shape
+    np.testing.assert_allclose(rr.Y, rw.Y, rtol=0, atol=1e-10 * np.max(np.abs(rw.Y)))
+    M = whole.derivatives(y, cm.copy()).monodromy
+    J = reduced.derivatives(y, cm.copy()).monodromy
+    assert np.linalg.norm(sym.monodromy(J) - M) <= 1e-7 * np.linalg.norm(M)
+    mu, mu_r = np.sort_complex(np.linalg.eigvals(M)), np.sort_complex(np.linalg.eigvals(sym.monodromy(J)))
+    np.testing.assert_allclose(mu_r, mu, rtol=0, atol=1e-7)
+    Jd = reduced.differences(y, cm.copy(), orbit.scale, rel_step=1e-5)
+    S = orbit.scale[None, :] / orbit.scale[:, None]
+    assert np.max(np.abs((Jd - J) * S)) <= 1e-5 * np.max(np.abs(J * S))
+
+
+def test_a_continuation_on_the_reduced_map_has_the_whole_map_s_orbits_and_bifurcations():
+    """The tuned 24-blade ring (engine order 3: T / 8) from 273.8 to 275.6 rad/s on the reduced map and on the
+    whole one: the same Neimark-Sacker point (to 1e-6 rad/s) and border collision (to 1e-5: each at a grazing
+    located with a bracket, ``[274.2271501, 274.2271508]`` on the whole map, whose contacts graze one by one
+    within 3e-6 rad/s there, ``[274.2271496, 274.2271536]`` on the reduced one, where they are one), every
+    reduced branch point an orbit of the whole map (residual below 1e-8 of its scale) whose multipliers, from the
+    whole map's tangent, are the branch's, and the events of the whole period counted."""
+    cfg = load_config(MODELS / "bladed_disk_24.yaml")
+    whole = continuation(cfg, "omega", 273.8, 275.6, workers=1)
+    cyc = continuation(cfg, "omega", 273.8, 275.6, workers=1, cyclic=True)
+    assert whole.message == cyc.message == "reached omega = 275.6"
+
+    def kinds(b):
+        return [(q.kind, q.param) for q in b.special if q.kind in ("border-collision", "neimark-sacker")]
+
+    assert [k for k, _ in kinds(cyc)] == [k for k, _ in kinds(whole)] == ["border-collision", "neimark-sacker"]
+    (_, bc), (_, ns) = kinds(cyc)
+    (_, bc_whole), (_, ns_whole) = kinds(whole)
+    assert abs(bc - bc_whole) <= 1e-5 and abs(ns - ns_whole) <= 1e-6
+    scale = np.maximum(np.abs(cyc.states).max(axis=0), 1e-12)
+    for k in range(0, cyc.params.size, max(cyc.params.size // 4, 1)):
+        ig = make_integrator(apply_overrides(cfg, {"omega": float(cyc.params[k])}).build())
+        P = PeriodMap(ig, 1)
+        end, mode = P(cyc.states[k], cyc.modes[k].copy())
+        assert np.max(np.abs(end - cyc.states[k]) / scale) <= 1e-8
+        assert np.array_equal(mode, cyc.modes[k])
+        mu = np.linalg.eigvals(P.derivatives(cyc.states[k], cyc.modes[k].copy()).monodromy)
+        np.testing.assert_allclose(np.sort(np.abs(mu))[::-1][:6], np.sort(np.abs(cyc.multipliers[k]))[::-1][:6],
+                                   rtol=0, atol=1e-7)
+        assert cyc.events[k] == P.last_events
+
+
+def test_where_the_reduced_map_stalls_the_whole_map_takes_the_branch_past_it(monkeypatch):
+    """At 292.725 rad/s a switching time of the tuned 24-blade ring passes the reduced map's section (events
+    ``1.7e-9 T / 8`` after it) and the reduced continuation stalls; the whole map takes the branch on for ten
+    points, and the reduced map from there to the end. Each part resumes the last: every point is an orbit of the
+    whole map."""
+    from blademodel.orbits import arclength as al
+    parts = []
+    segment = al._segment
+
+    def recorded(*args, **kwargs):
+        b = segment(*args, **kwargs)
+        parts.append((kwargs["cyclic"], b.params.size, b.message))
+        return b
+
+    monkeypatch.setattr(al, "_segment", recorded)
+    cfg = load_config(MODELS / "bladed_disk_24.yaml")
+    b = continuation(cfg, "omega", 292.4, 293.2, workers=1, cyclic=True)
+    assert b.message == "reached omega = 293.2"
+    assert [c for c, _, _ in parts] == [True, False, True]
+    assert parts[0][2].startswith(al.STALLED) and parts[1][1] == parts[0][1] + al.CYCLIC_FALLBACK_POINTS
+    scale = np.maximum(np.abs(b.states).max(axis=0), 1e-12)
+    for k in (parts[0][1] - 1, parts[0][1] + 3, b.params.size - 1):
+        ig = make_integrator(apply_overrides(cfg, {"omega": float(b.params[k])}).build())
+        end, _ = PeriodMap(ig, 1)(b.states[k], b.modes[k].copy())
+        assert np.max(np.abs(end - b.states[k]) / scale) <= 1e-8
+
+
+@pytest.mark.parametrize("values, field", [
+    ({"mistuning_std": 0.02}, "mistuning"),
+    ({"contacts": {2: {"mu": 0.3}}}, "contacts"),
+    ({"engine_order": 8}, "engine_order"),
+    ({"engine_order": 0}, "engine_order"),
+])
+def test_a_ring_without_the_symmetry_is_refused_naming_what_breaks_it(values, field):
+    cfg = BladedDisk(**{"blades": 8, "engine_order": 3, "friction": "coulomb", "omega": 286.0, **values})
+    ig = make_integrator(cfg.build(), steps_per_period=SPP)
+    with pytest.raises(CyclicError, match=field):
+        CyclicSymmetry(cfg, ig)
+
+
+def test_the_reduced_map_needs_whole_steps_and_a_ring():
+    cfg = BladedDisk(blades=8, engine_order=3, friction="coulomb", omega=286.0)
+    with pytest.raises(CyclicError, match="steps_per_period = 1001"):
+        CyclicSymmetry(cfg, make_integrator(cfg.build(), steps_per_period=1001))
+    from blademodel.zheng2022 import BladePair
+    with pytest.raises(CyclicError, match="bladed disk"):
+        continuation(BladePair(), "omega", 280.0, 281.0, cyclic=True)
+
+
+def test_the_continue_command_with_cyclic(tmp_path, capsys):
+    """``blademodel continue --cyclic``: the branch on the reduced map, saved and reported as any (its events of
+    the whole period); refused on a mistuned ring (exit code 2, naming the field) and with ``--switch``."""
+    import json
+
+    from blademodel.cli import main
+    from blademodel.orbits.branch_file import load_branch
+    yaml = str(MODELS / "bladed_disk_24.yaml")
+    out = tmp_path / "ring.nc"
+    assert main(["continue", yaml, "--param", "omega", "--from", "280", "--to", "280.4", "--cyclic", "--json",
+                 "--out", str(out), "--workers", "1"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["message"] == "reached omega = 280.4"
+    b = load_branch(out)
+    ig = make_integrator(apply_overrides(load_config(MODELS / "bladed_disk_24.yaml"), {"omega": 280.0}).build())
+    P = PeriodMap(ig, 1)
+    end, _ = P(b.states[0], b.modes[0].copy())
+    assert np.max(np.abs(end - b.states[0])) <= 1e-8 * np.max(np.abs(b.states[0]))
+    assert b.events[0] == P.last_events
+    assert main(["continue", yaml, "--param", "omega", "--from", "280", "--to", "280.4", "--cyclic",
+                 "--set", "mistuning_std=0.02"]) == 2
+    assert "mistuning" in capsys.readouterr().err
+    assert main(["continue", yaml, "--param", "omega", "--from", "280", "--to", "280.4", "--cyclic",
+                 "--switch"]) == 2
+    assert "--switch" in capsys.readouterr().err
