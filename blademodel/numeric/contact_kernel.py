@@ -265,6 +265,10 @@ class ContactIntegrator(Integrator):
     """
 
     kernel = "contact"
+    #: The integrator covers ``1 / period_fraction`` of the excitation period (in as many fewer steps): a tuned
+    #: ring's map reduced by its symmetry (:mod:`blademodel.orbits.cyclic`). A new excitation period given to
+    #: :meth:`with_parameter_values` is divided by it.
+    period_fraction = 1
 
     def __init__(self, model: Model, *, steps_per_period: int = 1000, event_tol: float = 1e-10,
                  max_events_per_step: int = 100, energy: bool = False, period: float | None = None,
@@ -364,7 +368,7 @@ class ContactIntegrator(Integrator):
         The cheap form of :meth:`with_parameters` for callers that know the values
         already (continuation, which moves one config field at every correction): no
         model is built. ``period`` is the new excitation period (ignored if the period
-        was given explicitly; ``None`` keeps it). The copy packs the values into tables
+        was given explicitly; ``None`` keeps it; divided by :attr:`period_fraction`). The copy packs the values into tables
         of its own and checks the step from the modes' Jacobians, whose limit is computed
         once for each :meth:`flow_digest` and shared by every copy (the excitation
         frequency moves none).
@@ -380,7 +384,7 @@ class ContactIntegrator(Integrator):
         p_raw = checked_parameter_values(p_raw, self.param_names)
         new = copy.copy(self)
         if period is not None and not self._explicit_period:
-            new.period = float(period)
+            new.period = float(period) / self.period_fraction
         offsets, pos = self._layout
         values = dict(zip(self.param_names, p_raw.tolist()))
         new.tables = NumericTables(self._table_source, values, self.kind, offsets, self.param_names, pos)

@@ -308,6 +308,10 @@ class _Family:
         the model built at ``value``, or (another structure) a new one."""
         from ..numeric.integrator import StructureMismatch
         from ..numeric.kernels import make_integrator
+        if self.symmetry is not None and self._first is not None:
+            # moved from the reduced first integrator, the copies are reduced ones: the whole period's tables
+            # (the forcing's phase table among them) are not packed for every value
+            self._first = self.symmetry.reduced(self._first)
         path = self.path()
         if path is not None and path.covers(value):
             return self._first.with_parameter_values(*path.at(value))
@@ -757,6 +761,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     fam, span = ctx.fam, ctx.span
     name = fam.name
     ig = fam.map_at(X[-1] * span).integrator
+    ig_fraction = getattr(ig, "period_fraction", 1)   # (a reduced map's integrator: the whole period's steps)
     n_q = _n_coordinates(ig)
     lo, hi = min(bounds), max(bounds)
     h = ds
@@ -816,7 +821,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
                         A = None
                     jumped, h = True, 4 * ds_min * max(1.0, ds / ds_min) ** 0.5
                     continue
-                message = _stalled(ds_min, name, X[-1] * span, ctx.why, ig.steps_per_period)
+                message = _stalled(ds_min, name, X[-1] * span, ctx.why, ig.steps_per_period * ig_fraction)
                 break
             h /= 2
             continue
@@ -828,7 +833,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             ctx.why = f"the corrected point's residual {new['residual']:.3g} exceeds tol"
             h /= 2
             if h < ds_min:
-                message = _stalled(ds_min, name, X[-1] * span, ctx.why, ig.steps_per_period)
+                message = _stalled(ds_min, name, X[-1] * span, ctx.why, ig.steps_per_period * ig_fraction)
                 break
             continue
         new["regular"] = not (secant or arm)
@@ -1499,7 +1504,7 @@ class _Context:
         P = self.fam.map_at(lam)
         y = X[:-1] * self.scale
         r = P.run(y, mode)
-        Y = r.Y
+        Y = r.period_orbit()
         residual = float(np.max(np.abs(r.end[:self.n] - y) / self.scale))
         top, bottom = Y.max(axis=0), Y.min(axis=0)
         amp = 0.5 * (top - bottom)

@@ -90,10 +90,15 @@ class CyclicSymmetry:
         self._powers = powers
 
     def reduced(self, integrator):
-        """A copy of ``integrator`` over ``tau = T / d`` in ``S / d`` steps (the same step): the reduced map's."""
+        """``integrator`` over ``tau = T / d`` in ``S / d`` steps (the same step): the reduced map's. A copy (its
+        :attr:`~blademodel.numeric.contact_kernel.ContactIntegrator.period_fraction` ``d``, so that its copies with
+        other parameter values stay reduced), or ``integrator`` itself where it is one already."""
+        if getattr(integrator, "period_fraction", 1) == self.fraction:
+            return integrator
         new = copy.copy(integrator)
         new.period = integrator.period / self.fraction
         new.steps_per_period = integrator.steps_per_period // self.fraction
+        new.period_fraction = self.fraction
         new._pack()   # its tables (the forcing's phase table is for a whole period: none over a fraction)
         return new
 

@@ -51,6 +51,9 @@ class MapRun:
     anonymous : bool
         The contacts are all alike (a run of a map reduced by a ring's symmetry): the
         signature leaves out which contact an event was at.
+    rebuild : callable or None
+        For a run of a map reduced by a ring's symmetry, what rebuilds the orbit over the
+        whole period from ``Y`` (:meth:`period_orbit`).
     """
 
     start: np.ndarray
@@ -66,7 +69,18 @@ class MapRun:
     events: int
     modes: np.ndarray | None = None
     anonymous: bool = False
+    rebuild: object = None
     _signature: tuple | None = field(default=None, repr=False)
+    _whole: np.ndarray | None = field(default=None, repr=False)
+
+    def period_orbit(self) -> np.ndarray:
+        """The orbit at every step over the map's periods (physical states, both ends included): ``Y``, or on a map
+        reduced by a ring's symmetry, the whole period rebuilt from it (once)."""
+        if self.rebuild is None:
+            return self.Y
+        if self._whole is None:
+            self._whole = self.rebuild(self.Y)
+        return self._whole
 
     def signature(self) -> tuple:
         """The run's events as a multiset: each transition (its guard, from and to modes, and on the
@@ -122,10 +136,12 @@ class PeriodMap:
     symmetry : CyclicSymmetry, optional
         A tuned ring's travelling-wave symmetry (:mod:`.cyclic`): the map is then the
         reduced one, ``G(y) = S^s Phi(0 -> T / d)(y)``, integrated over a ``d``-th of the
-        period (``periods`` must be 1), its Jacobian ``S^s dPhi``; the runs' ``Y`` is the
-        orbit over the whole period rebuilt from the reduced run (their ``t``, ``states``,
-        ``modes`` and ``log`` are the reduced run's). ``integrator`` stays the whole
-        period's; the map integrates with a copy over ``T / d``.
+        period (``periods`` must be 1), its Jacobian ``S^s dPhi``; the runs are the reduced
+        ones (``t``, ``Y``, ``states``, ``modes``, ``log``), with the end state and modes
+        turned, and :meth:`MapRun.period_orbit` rebuilds the orbit over the whole period.
+        ``integrator`` may be the whole
+        period's (the map integrates with a copy over ``T / d``) or that copy already
+        (:meth:`~blademodel.orbits.cyclic.CyclicSymmetry.reduced`).
     """
 
     #: A Jacobian by differences is shared among threads only where one column (two integrations) takes at
@@ -190,14 +206,13 @@ class PeriodMap:
                 break
             self._log_size = int(counters[C_LOGGED]) + 16
         self.evaluations += 1
-        Y = rec[1][:, :self.n]
-        if self.symmetry is not None:   # G(y) = S^s Phi(y); the orbit over the whole period from the reduced run's
+        if self.symmetry is not None:   # G(y) = S^s Phi(y)
             full[:self.n] = self.symmetry.turned(full)
             mode_end = self.symmetry.turned_modes(mode_end)
-            Y = self.symmetry.whole_period(Y)
-        r = MapRun(start=start, mode=m0, fired=fired, end=full, mode_end=mode_end, t=rec[0], Y=Y,
+        r = MapRun(start=start, mode=m0, fired=fired, end=full, mode_end=mode_end, t=rec[0], Y=rec[1][:, :self.n],
                    states=rec[1], log=log, n_log=int(counters[C_LOGGED]), events=int(counters[C_EVENTS]),
-                   modes=rec[2] if len(rec) > 2 else None, anonymous=self.symmetry is not None)
+                   modes=rec[2] if len(rec) > 2 else None, anonymous=self.symmetry is not None,
+                   rebuild=None if self.symmetry is None else self.symmetry.whole_period)
         self._last = (key, r)
         return r
 
