@@ -57,7 +57,8 @@ class CyclicSymmetry:
     """
 
     def __init__(self, config, integrator):
-        if type(config).__name__ != "BladedDisk":
+        from ..config import BladedDisk
+        if not isinstance(config, BladedDisk):
             raise CyclicError(f"the cyclic reduction needs a bladed disk (model: bladed_disk), not "
                               f"{type(config).__name__}")
         N, EO = int(config.blades), int(config.engine_order)
