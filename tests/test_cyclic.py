@@ -91,8 +91,8 @@ def test_a_continuation_on_the_reduced_map_has_the_whole_map_s_orbits_and_bifurc
 def test_where_the_reduced_map_stalls_the_whole_map_takes_the_branch_past_it(monkeypatch):
     """At 292.725 rad/s a switching time of the tuned 24-blade ring passes the reduced map's section (events
     ``1.7e-9 T / 8`` after it) and the reduced continuation stalls; the whole map takes the branch on for ten
-    points, and the reduced map from there to the end. Each part resumes the last: every point is an orbit of the
-    whole map."""
+    points, and the reduced map from there to the end, the message saying where. Each part resumes the last:
+    every point is an orbit of the whole map."""
     from blademodel.orbits import arclength as al
     parts = []
     segment = al._segment
@@ -105,7 +105,7 @@ def test_where_the_reduced_map_stalls_the_whole_map_takes_the_branch_past_it(mon
     monkeypatch.setattr(al, "_segment", recorded)
     cfg = load_config(MODELS / "bladed_disk_24.yaml")
     b = continuation(cfg, "omega", 292.4, 293.2, workers=1, cyclic=True)
-    assert b.message == "reached omega = 293.2"
+    assert b.message.startswith("reached omega = 293.2 (the cyclic reduction stalled at omega = 292.72")
     assert [c for c, _, _ in parts] == [True, False, True]
     assert parts[0][2].startswith(al.STALLED) and parts[1][1] == parts[0][1] + al.CYCLIC_FALLBACK_POINTS
     scale = np.maximum(np.abs(b.states).max(axis=0), 1e-12)

@@ -447,6 +447,7 @@ def _cyclic_branch(config, name, start, stop, resume, kwargs) -> Branch:
     max_points = kwargs["max_points"]
     b = resume
     cyclic = True
+    stalls: list = []   # where the reduced map stalled and the whole map took over
     while True:
         if b is not None:   # a part after the first goes on from the last orbit, not from a transient
             kwargs = {**kwargs, "transient": 0}
@@ -456,10 +457,12 @@ def _cyclic_branch(config, name, start, stop, resume, kwargs) -> Branch:
             except CyclicError:
                 if b is None:
                     raise
+                stalls.append((float(b.params[-1]), "its orbit there is no travelling wave"))
                 cyclic = False   # the orbit past the stall broke the symmetry: the whole map from here on
                 continue
             if not b.message.startswith(STALLED) or b.params.size >= max_points:
-                return b
+                return _noting(b, name, stalls)
+            stalls.append((float(b.params[-1]), None))
             cyclic = False
             limit = min(b.params.size + CYCLIC_FALLBACK_POINTS, max_points)
         else:
@@ -467,8 +470,17 @@ def _cyclic_branch(config, name, start, stop, resume, kwargs) -> Branch:
         before = b.params.size
         b = _segment(config, name, start, stop, resume=b, cyclic=False, **{**kwargs, "max_points": limit})
         if limit == max_points or b.message.startswith(STALLED) or b.params.size <= before:
-            return b
+            return _noting(b, name, stalls)
         cyclic = True
+
+
+def _noting(b: Branch, name: str, stalls: list) -> Branch:
+    """``b`` with its message saying where the whole period's map took over from the cyclic reduction."""
+    if not stalls:
+        return b
+    where = ", ".join(f"{name} = {v:.6g}" + (f" ({why})" if why else "") for v, why in stalls)
+    return replace(b, message=f"{b.message} (the cyclic reduction stalled at {where}; the whole period's map took "
+                              f"the branch on from there)")
 
 
 def _segment(config, name: str, start: float, stop: float, *, periods, guess, mode, transient, ds, ds_min, ds_max,
