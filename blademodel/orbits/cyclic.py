@@ -80,7 +80,8 @@ class CyclicSymmetry:
         S = int(integrator.steps_per_period)
         if S % self.fraction:
             raise CyclicError(f"steps_per_period = {S} is not a multiple of {self.fraction}: the reduced map "
-                              f"covers T / {self.fraction} in whole steps")
+                              f"covers T / {self.fraction} in whole steps (--steps-per-period "
+                              f"{-(-S // self.fraction) * self.fraction} would do)")
         self.n = int(integrator.n_physical)
         self.index = _turned(list(integrator.meta["state"])[:self.n], N, self.turn)        # states
         self.contact_index = _turned(list(integrator.meta["contacts"]), N, self.turn)    # contact modes
