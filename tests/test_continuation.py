@@ -790,3 +790,40 @@ def test_a_branch_that_comes_round_onto_itself_stops_and_says_so(monkeypatch):
     assert b.params[k] == pytest.approx(plain.params[5], abs=1e-9)
     np.testing.assert_allclose(b.states[k], plain.states[5], rtol=1e-6, atol=1e-9 * np.abs(plain.states).max())
     assert np.all((b.params[k + 1:] < plain.params[5]) & (b.params[k + 1:] > plain.params[5 + b.params.size - k]))
+
+
+def test_a_branch_resumed_where_it_stalled_at_a_gap_goes_on_across_it(monkeypatch):
+    """A branch stopped where its step fell below ``ds_min`` at a stretch with no orbit (made here, as above,
+    between 255.0 and 255.2 rad/s on the bilinear pair; the first run without the gap's shots), resumed: its first
+    step fails there again, and the shots past a gap take the secant of the resumed branch's last two points, as
+    they would take the branch's own. Without them (a resumed branch holds one point of its own at first) it
+    stalled again at once: the whole map resumed where the cyclic reduction stalls on the bilinear 24-blade ring
+    (290.847 rad/s) did."""
+    from blademodel.orbits import arclength as al
+    from blademodel.orbits.period_map import FlowError
+    residual, shoot = al._Context.residual, al._Context.correct_at_value
+
+    def gapped(self, X, mode):
+        if 255.0 < X[-1] * self.span < 255.2:
+            raise FlowError("no orbit here (a test's gap)")
+        return residual(self, X, mode)
+
+    def gapped_shot(self, X, mode, jacobian=True):
+        if 255.0 < X[-1] * self.span < 255.2:
+            self.why = "no orbit here (a test's gap)"
+            return None, mode, None
+        return shoot(self, X, mode, jacobian)
+
+    monkeypatch.setattr(al._Context, "residual", gapped)
+    monkeypatch.setattr(al._Context, "correct_at_value", gapped_shot)
+    cfg = BladePair(friction="bilinear")
+    monkeypatch.setattr(al, "GAP_REACH", ())
+    stalled = continuation(cfg, "omega", 250.0, 260.0, workers=1)
+    assert stalled.message.startswith(al.STALLED) and 254.9 < stalled.params[-1] <= 255.0
+    monkeypatch.undo()
+    monkeypatch.setattr(al._Context, "residual", gapped)
+    monkeypatch.setattr(al._Context, "correct_at_value", gapped_shot)
+    b = continuation(cfg, "omega", 250.0, 260.0, workers=1, resume=stalled, transient=0)
+    assert b.message == "reached omega = 260"
+    (gap,) = b.points("gap")
+    assert gap.bracket[0] == pytest.approx(stalled.params[-1]) and gap.bracket[1] >= 255.2

@@ -703,7 +703,10 @@ def _run(ctx, pts, X, T, m, A, bounds, *, progress, checkpoint, checkpoint_every
     ctx.locator = Locator(ctx.twin, thread=ctx.fam.workers >= 2)
     try:
         try:
-            message = _follow(ctx, pts, special, X, T, m, A, bounds, progress=report, earlier=earlier, **follow)
+            prior = None if before is None or before.params.size < 2 else \
+                {"state": before.states[-2], "param": float(before.params[-2])}
+            message = _follow(ctx, pts, special, X, T, m, A, bounds, progress=report, earlier=earlier, prior=prior,
+                              **follow)
         except KeyboardInterrupt:
             interrupts.acknowledge()
             where = f"{ctx.fam.name} = {pts[-1]['param']:.6g}"
@@ -763,11 +766,13 @@ def _no_first_orbit(e: ShootingError, name: str, at: float, periods: int, transi
 
 
 def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, locate_tol, progress,
-            earlier: int = 0) -> str:
+            earlier: int = 0, prior: dict | None = None) -> str:
     """Continue from the last point ``pts[-1]`` (unknowns ``X``, tangent ``T``) until the field leaves ``bounds``.
 
     Appends the points to ``pts`` and the special points to ``special`` as it finds them;
-    returns why it stopped. ``earlier`` points before ``pts`` (a resumed branch's) count
+    returns why it stopped. ``prior``: a resumed branch's point before ``pts[0]`` (its
+    ``state`` and ``param``), for the secant that the shots past a kink or a gap take while
+    ``pts`` holds one point. ``earlier`` points before ``pts`` (a resumed branch's) count
     toward ``max_points``, and progress reports the total.
     """
     fam, span = ctx.fam, ctx.span
@@ -797,14 +802,15 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             # time passing the section); away from folds, shooting at the predicted value does not
             X_new, m_new, A_new = ctx.correct_at_value(X + h * T, m)
             secant = X_new is not None
-        if X_new is None and h / 2 < ds_min and not ahead and len(pts) > 1 and shots:
+        trail = pts if len(pts) > 1 or prior is None else [prior, *pts]   # the last two points for a secant
+        if X_new is None and h / 2 < ds_min and not ahead and len(trail) > 1 and shots:
             # the arclength corrections fail at every step length just before a kink of the map (a
             # stick phase that appears or vanishes): shooting at values of the field just past it,
             # from the last orbit, converges (the Coulomb pair at 164.915 rad/s, in 2 to 5 steps).
             # The way on is the secant's (the tangent from difference quotients that straddle the
             # kink can point anywhere: there its field component was -0.003 on a rising branch)
             ahead = True
-            X_new, m_new, A_new = _shoot_along_secant(ctx, pts, X, m)
+            X_new, m_new, A_new = _shoot_along_secant(ctx, trail, X, m)
             secant = X_new is not None
         arm = False
         if X_new is None and h / 2 < ds_min and jumped and not switched and pts[-1]["unstable"]:
@@ -814,20 +820,20 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             X_new, m_new, A_new = _other_arm(ctx, pts, X, m, ds_max)
             arm = X_new is not None
         gap = False
-        if X_new is None and h / 2 < ds_min and jumped and shots and not gap_tried and len(pts) > 1:
+        if X_new is None and h / 2 < ds_min and jumped and shots and not gap_tried and len(trail) > 1:
             # everything else failed at the shortest step: the discrete flow may have no orbit over a
             # stretch (the bilinear 24-blade ring from 290.85 to 290.90 rad/s at 1000 steps a period, and
             # orbits from 290.95 on); shooting farther on, from the last orbit, may find the branch past it
             gap_tried = True
-            X_new, m_new, A_new = _shoot_along_secant(ctx, pts, X, m, GAP_REACH)
+            X_new, m_new, A_new = _shoot_along_secant(ctx, trail, X, m, GAP_REACH)
             gap = secant = X_new is not None
         if X_new is None:
             if h / 2 < ds_min:
-                if not jumped and len(pts) > 1:
+                if not jumped and len(trail) > 1:
                     # halving brought the prediction ever closer to a kink of the map (a switching
                     # time passing the section), where the difference quotients, and so the tangent,
                     # straddle it: jump across along the secant of the last two points instead
-                    prev = ctx.unknowns(pts[-2])
+                    prev = ctx.unknowns(trail[-2])
                     if np.linalg.norm(X - prev) > 0:
                         T = (X - prev) / np.linalg.norm(X - prev)
                         A = None
