@@ -139,9 +139,8 @@ class PeriodMap:
         period (``periods`` must be 1), its Jacobian ``S^s dPhi``; the runs are the reduced
         ones (``t``, ``Y``, ``states``, ``modes``, ``log``), with the end state and modes
         turned, and :meth:`MapRun.period_orbit` rebuilds the orbit over the whole period.
-        ``integrator`` may be the whole
-        period's (the map integrates with a copy over ``T / d``) or that copy already
-        (:meth:`~blademodel.orbits.cyclic.CyclicSymmetry.reduced`).
+        ``integrator`` may be the whole period's (the map integrates with a copy over
+        ``T / d``) or that copy already (:meth:`~blademodel.orbits.cyclic.CyclicSymmetry.reduced`).
     """
 
     #: A Jacobian by differences is shared among threads only where one column (two integrations) takes at
