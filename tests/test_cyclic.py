@@ -139,7 +139,8 @@ def test_the_reduced_map_needs_whole_steps_and_a_ring():
 
 def test_the_continue_command_with_cyclic(tmp_path, capsys):
     """``blademodel continue --cyclic``: the branch on the reduced map, saved and reported as any (its events of
-    the whole period); refused on a mistuned ring (exit code 2, naming the field) and with ``--switch``."""
+    the whole period); without it, a tuned ring gets a hint that it may be used (a mistuned one none); refused on a
+    mistuned ring (exit code 2, naming the field) and with ``--switch``."""
     import json
 
     from blademodel.cli import main
@@ -150,6 +151,9 @@ def test_the_continue_command_with_cyclic(tmp_path, capsys):
                  "--out", str(out), "--workers", "1"]) == 0
     rep = json.loads(capsys.readouterr().out)
     assert rep["message"] == "reached omega = 280.4"
+    assert main(["continue", yaml, "--param", "omega", "--from", "280", "--to", "280.05", "--workers", "1"]) == 0
+    assert "hint: this ring is tuned and driven in engine order: --cyclic follows its travelling waves on T / 8" \
+        in capsys.readouterr().err
     b = load_branch(out)
     ig = make_integrator(apply_overrides(load_config(MODELS / "bladed_disk_24.yaml"), {"omega": 280.0}).build())
     P = PeriodMap(ig, 1)
@@ -159,6 +163,9 @@ def test_the_continue_command_with_cyclic(tmp_path, capsys):
     assert main(["continue", yaml, "--param", "omega", "--from", "280", "--to", "280.4", "--cyclic",
                  "--set", "mistuning_std=0.02"]) == 2
     assert "mistuning" in capsys.readouterr().err
+    assert main(["continue", yaml, "--param", "omega", "--from", "280", "--to", "280.05", "--workers", "1",
+                 "--set", "mistuning_std=0.02", "--max-points", "3"]) == 0
+    assert "hint" not in capsys.readouterr().err   # a mistuned ring gets no hint
     assert main(["continue", yaml, "--param", "omega", "--from", "280", "--to", "280.4", "--cyclic",
                  "--switch"]) == 2
     assert "--switch" in capsys.readouterr().err

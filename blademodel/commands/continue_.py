@@ -109,6 +109,20 @@ def sweep_overlay(path, field: str, state_index: int, law: str | None = None) ->
     return ds[f"param_{field}"].values[ok], ds["harmonic1"].values[ok, state_index]
 
 
+def _hint_cyclic(config, period: int) -> None:
+    """On a tuned ring under engine-order excitation, say on stderr that ``--cyclic`` may follow its period-1 orbits
+    on a fraction of the period."""
+    from ..orbits.cyclic import CyclicError, reducible
+    if period != 1:
+        return
+    try:
+        N, _, g = reducible(config)
+    except CyclicError:
+        return
+    print(f"hint: this ring is tuned and driven in engine order: --cyclic follows its travelling waves on T / "
+          f"{N // g} of the period, the whole ring's multipliers from it (docs/orbits.md)", file=sys.stderr)
+
+
 def run(args: argparse.Namespace) -> int:
     """Continue the branch; return the exit code."""
     check_at_least_one(args, ("period", "max_points", "steps_per_period"))
@@ -133,6 +147,8 @@ def run(args: argparse.Namespace) -> int:
         if not args.grazing_tol > 0:
             raise ValueError(f"--grazing-tol must be > 0 (or inf), got {args.grazing_tol}")
         run_settings["grazing_tol"] = args.grazing_tol
+    if not args.cyclic and not args.json:
+        _hint_cyclic(config, args.period)
     if args.cyclic:
         if args.switch:
             raise ValueError("--cyclic follows travelling waves of period 1: a period-doubled branch (--switch) "

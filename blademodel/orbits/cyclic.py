@@ -57,23 +57,7 @@ class CyclicSymmetry:
     """
 
     def __init__(self, config, integrator):
-        from ..config import BladedDisk
-        if not isinstance(config, BladedDisk):
-            raise CyclicError(f"the cyclic reduction needs a bladed disk (model: bladed_disk), not "
-                              f"{type(config).__name__}")
-        N, EO = int(config.blades), int(config.engine_order)
-        if np.any(config.deviations != 0.0):
-            raise CyclicError("the cyclic reduction needs a tuned ring: mistuning / mistuning_std = "
-                              f"{config.mistuning if config.mistuning is not None else config.mistuning_std!r} "
-                              "makes the blades differ")
-        for name in ("blade_values", "contacts"):
-            if getattr(config, name):
-                raise CyclicError(f"the cyclic reduction needs a tuned ring: {name} = {getattr(config, name)!r} "
-                                  f"makes single blades or contacts differ")
-        g = math.gcd(EO, N)
-        if g == N:
-            raise CyclicError(f"engine_order = {EO} drives every blade in phase (a multiple of blades = {N}): "
-                              f"the symmetry shifts no time, and nothing is reduced")
+        N, EO, g = reducible(config)
         self.blades, self.engine_order = N, EO
         self.fraction = N // g                                   # d: the reduced map covers T / d
         self.turn = next(s for s in range(1, N) if (s * EO) % N == g)   # s
@@ -139,6 +123,35 @@ class CyclicSymmetry:
             out[k * steps:(k + 1) * steps] = Y[:steps][:, self._powers[k]]
         out[-1] = Y[steps][self._powers[d - 1]]
         return out
+
+
+def reducible(config) -> tuple[int, int, int]:
+    """``(N, EO, g)`` of a bladed disk's config that the cyclic reduction can take (``g = gcd(EO, N)``; the reduced
+    map covers ``T / (N / g)``).
+
+    Raises
+    ------
+    CyclicError
+        Naming the field that breaks the symmetry (or that the config is no bladed disk).
+    """
+    from ..config import BladedDisk
+    if not isinstance(config, BladedDisk):
+        raise CyclicError(f"the cyclic reduction needs a bladed disk (model: bladed_disk), not "
+                          f"{type(config).__name__}")
+    N, EO = int(config.blades), int(config.engine_order)
+    if np.any(config.deviations != 0.0):
+        raise CyclicError("the cyclic reduction needs a tuned ring: mistuning / mistuning_std = "
+                          f"{config.mistuning if config.mistuning is not None else config.mistuning_std!r} "
+                          "makes the blades differ")
+    for name in ("blade_values", "contacts"):
+        if getattr(config, name):
+            raise CyclicError(f"the cyclic reduction needs a tuned ring: {name} = {getattr(config, name)!r} "
+                              f"makes single blades or contacts differ")
+    g = math.gcd(EO, N)
+    if g == N:
+        raise CyclicError(f"engine_order = {EO} drives every blade in phase (a multiple of blades = {N}): "
+                          f"the symmetry shifts no time, and nothing is reduced")
+    return N, EO, g
 
 
 def _turned(names: list, N: int, s: int) -> np.ndarray:
