@@ -681,6 +681,27 @@ def test_a_correction_that_lands_on_the_branch_already_passed_is_refused(monkeyp
     assert abs(b.params.size - plain.params.size) <= 2
 
 
+def _no_orbits_between(monkeypatch, lo, hi):
+    """Make every residual and every shot at a value of the field in ``(lo, hi)`` fail: a stretch with no orbit."""
+    from blademodel.orbits import arclength as al
+    from blademodel.orbits.period_map import FlowError
+    residual, shoot = al._Context.residual, al._Context.correct_at_value
+
+    def gapped(self, X, mode):
+        if lo < X[-1] * self.span < hi:
+            raise FlowError("no orbit here (a test's gap)")
+        return residual(self, X, mode)
+
+    def gapped_shot(self, X, mode, jacobian=True):
+        if lo < X[-1] * self.span < hi:
+            self.why = "no orbit here (a test's gap)"
+            return None, mode, None
+        return shoot(self, X, mode, jacobian)
+
+    monkeypatch.setattr(al._Context, "residual", gapped)
+    monkeypatch.setattr(al._Context, "correct_at_value", gapped_shot)
+
+
 def test_a_branch_goes_on_across_a_stretch_with_no_orbit_and_reports_the_gap(monkeypatch, capsys):
     """Where the continuation finds no orbit over a stretch of the field (the discrete flow's gaps: the bilinear
     24-blade ring from 290.85 to 290.90 rad/s at 1000 steps a period), it used to stop there. Here every correction
@@ -688,27 +709,9 @@ def test_a_branch_goes_on_across_a_stretch_with_no_orbit_and_reports_the_gap(mon
     the first orbit that shooting farther on finds, reports a ``gap`` whose bracket holds the stretch, and its points
     past the gap are the branch's orbits there (shooting from the unpatched branch's nearest orbits at the same
     values). The command says so, and the plot draws no line across the gap."""
-    from blademodel.orbits import arclength as al
-    from blademodel.orbits.period_map import FlowError
     cfg = BladePair(friction="bilinear")
     plain = continuation(cfg, "omega", 250.0, 260.0, workers=1)
-    residual = al._Context.residual
-
-    def gapped(self, X, mode):
-        if 255.0 < X[-1] * self.span < 255.2:
-            raise FlowError("no orbit here (a test's gap)")
-        return residual(self, X, mode)
-
-    monkeypatch.setattr(al._Context, "residual", gapped)
-    shoot = al._Context.correct_at_value
-
-    def gapped_shot(self, X, mode, jacobian=True):
-        if 255.0 < X[-1] * self.span < 255.2:
-            self.why = "no orbit here (a test's gap)"
-            return None, mode, None
-        return shoot(self, X, mode, jacobian)
-
-    monkeypatch.setattr(al._Context, "correct_at_value", gapped_shot)
+    _no_orbits_between(monkeypatch, 255.0, 255.2)
     b = continuation(cfg, "omega", 250.0, 260.0, workers=1)
     assert b.message == plain.message == "reached omega = 260"
     (gap,) = b.points("gap")
@@ -800,29 +803,13 @@ def test_a_branch_resumed_where_it_stalled_at_a_gap_goes_on_across_it(monkeypatc
     stalled again at once: the whole map resumed where the cyclic reduction stalls on the bilinear 24-blade ring
     (290.847 rad/s) did."""
     from blademodel.orbits import arclength as al
-    from blademodel.orbits.period_map import FlowError
-    residual, shoot = al._Context.residual, al._Context.correct_at_value
-
-    def gapped(self, X, mode):
-        if 255.0 < X[-1] * self.span < 255.2:
-            raise FlowError("no orbit here (a test's gap)")
-        return residual(self, X, mode)
-
-    def gapped_shot(self, X, mode, jacobian=True):
-        if 255.0 < X[-1] * self.span < 255.2:
-            self.why = "no orbit here (a test's gap)"
-            return None, mode, None
-        return shoot(self, X, mode, jacobian)
-
-    monkeypatch.setattr(al._Context, "residual", gapped)
-    monkeypatch.setattr(al._Context, "correct_at_value", gapped_shot)
+    _no_orbits_between(monkeypatch, 255.0, 255.2)
     cfg = BladePair(friction="bilinear")
+    reach = al.GAP_REACH
     monkeypatch.setattr(al, "GAP_REACH", ())
     stalled = continuation(cfg, "omega", 250.0, 260.0, workers=1)
     assert stalled.message.startswith(al.STALLED) and 254.9 < stalled.params[-1] <= 255.0
-    monkeypatch.undo()
-    monkeypatch.setattr(al._Context, "residual", gapped)
-    monkeypatch.setattr(al._Context, "correct_at_value", gapped_shot)
+    monkeypatch.setattr(al, "GAP_REACH", reach)
     b = continuation(cfg, "omega", 250.0, 260.0, workers=1, resume=stalled, transient=0)
     assert b.message == "reached omega = 260"
     (gap,) = b.points("gap")

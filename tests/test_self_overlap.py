@@ -13,11 +13,10 @@ def _verdicts(curve):
     track, pts, found = SelfOverlap(2), [], []
     for k, row in enumerate(curve):
         pts.append({"state": row[:2], "param": row[2]})
-        track.sync(pts, WEIGHTS)
         step = float(np.linalg.norm(curve[k] - curve[k - 1])) if k else 0.0
-        way = track.verdict(k, WEIGHTS, step)
-        if way is not None:
-            found.append((k, way))
+        found_here = track.verdict(pts, WEIGHTS, step)
+        if found_here is not None:
+            found.append((k, found_here[0]))
     return found
 
 
@@ -89,6 +88,6 @@ def test_points_the_branch_dropped_are_forgotten(dropped):
     found = []
     for row in _helix(np.arange(0.6037, 1.0, 0.0093)):
         pts.append({"state": row[:2], "param": row[2]})
-        track.sync(pts, WEIGHTS)
-        found.append(track.verdict(len(pts) - 1, WEIGHTS, 0.0093))
+        found_here = track.verdict(pts, WEIGHTS, 0.0093)
+        found.append(None if found_here is None else found_here[0])
     assert set(found) == ({None} if dropped else {None, "round"})

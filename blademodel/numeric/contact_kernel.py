@@ -368,8 +368,9 @@ class ContactIntegrator(Integrator):
         The cheap form of :meth:`with_parameters` for callers that know the values
         already (continuation, which moves one config field at every correction): no
         model is built. ``period`` is the new excitation period (ignored if the period
-        was given explicitly; ``None`` keeps it; divided by :attr:`period_fraction`). The copy packs the values into tables
-        of its own and checks the step from the modes' Jacobians, whose limit is computed
+        was given explicitly; ``None`` keeps it; divided by :attr:`period_fraction`). The
+        copy packs the values into tables of its own and checks the step from the modes'
+        Jacobians, whose limit is computed
         once for each :meth:`flow_digest` and shared by every copy (the excitation
         frequency moves none).
 

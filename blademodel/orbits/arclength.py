@@ -51,7 +51,7 @@ from ..numeric.blas_threads import blas_threads_for
 from .background import Locator, PendingPoint, resolve
 from .field_path import AffineFieldPath
 from .period_map import FlowError, PeriodMap, _copy, _key, kernel_mode, worker_count
-from .self_overlap import CHECK_EVERY, CHECKS, SelfOverlap
+from .self_overlap import SelfOverlap
 from .shooting import (ShootingError, _n_coordinates, _orbit_samples, _same, _scale_of_excursions, _state_scale,
                        find_periodic_orbit)
 
@@ -223,6 +223,11 @@ class _Family:
         self._probed = False
         self.symmetry = None   # a tuned ring's CyclicSymmetry: the maps are then the reduced ones (.cyclic)
 
+    def reduce_by(self, symmetry) -> None:
+        """Make the maps from here on the ones reduced by a tuned ring's ``symmetry`` (:mod:`.cyclic`)."""
+        self.symmetry = symmetry
+        self._cache.clear()
+
     def config_at(self, value: float):
         from ..config import apply_overrides
         return apply_overrides(self.config, {self.name: float(value)}, source="continuation")
@@ -293,7 +298,7 @@ class _Family:
         its first integrator is built at this one's first value, so that both move from it alike."""
         twin = _Family(self.config, self.name, self.periods, self.settings, self.first_value, self.jacobian,
                        bounds=self._bounds, workers=1)
-        twin.symmetry = self.symmetry
+        twin.reduce_by(self.symmetry)
         twin.map_at(self.first_value)
         return twin
 
@@ -504,8 +509,7 @@ def _segment(config, name: str, start: float, stop: float, *, periods, guess, mo
         from .cyclic import CyclicError, CyclicSymmetry
         if periods != 1:
             raise CyclicError(f"the cyclic reduction maps one period's orbits only, not periods = {periods}")
-        fam.symmetry = CyclicSymmetry(fam.config_at(at), P0.integrator)
-        fam._cache.clear()   # the maps from here on are the reduced ones
+        fam.reduce_by(CyclicSymmetry(fam.config_at(at), P0.integrator))
     if resume is not None:
         mode = _last_mode(resume, P0.integrator)
     try:
@@ -778,7 +782,6 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     fam, span = ctx.fam, ctx.span
     name = fam.name
     ig = fam.map_at(X[-1] * span).integrator
-    ig_fraction = getattr(ig, "period_fraction", 1)   # (a reduced map's integrator: the whole period's steps)
     n_q = _n_coordinates(ig)
     lo, hi = min(bounds), max(bounds)
     h = ds
@@ -839,7 +842,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
                         A = None
                     jumped, h = True, 4 * ds_min * max(1.0, ds / ds_min) ** 0.5
                     continue
-                message = _stalled(ds_min, name, X[-1] * span, ctx.why, ig.steps_per_period * ig_fraction)
+                message = _stalled(ds_min, name, X[-1] * span, ctx.why, fam.settings["steps_per_period"])
                 break
             h /= 2
             continue
@@ -851,7 +854,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             ctx.why = f"the corrected point's residual {new['residual']:.3g} exceeds tol"
             h /= 2
             if h < ds_min:
-                message = _stalled(ds_min, name, X[-1] * span, ctx.why, ig.steps_per_period * ig_fraction)
+                message = _stalled(ds_min, name, X[-1] * span, ctx.why, fam.settings["steps_per_period"])
                 break
             continue
         new["regular"] = not (secant or arm)
@@ -949,22 +952,18 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             if bounds[1] in (lo, hi) and (lam > hi if bounds[1] == hi else lam < lo):
                 message = f"reached {name} = {bounds[1]:g}"
             break
-        if new["regular"] and (len(pts) - 1) % CHECK_EVERY == 0:
-            weights = np.append(ctx.scale, span)
-            overlap.sync(pts, weights)
-            way = overlap.verdict(len(pts) - 1, weights, taken)
-            if way is not None:
-                message = _on_itself(way, name, pts, overlap.first_on(len(pts) - 1), len(pts) - 1, earlier)
-                break
+        on_itself = overlap.verdict(pts, np.append(ctx.scale, span), taken) if new["regular"] else None
+        if on_itself is not None:
+            message = _on_itself(*on_itself, name, pts, earlier)
+            break
     else:
         message = f"stopped after max_points = {max_points} points at {name} = {X[-1] * span:.6g}"
     return message
 
 
-def _on_itself(way, name, pts, segment, k, earlier) -> str:
-    """Why a branch stopped whose points from about ``pts[k - (CHECKS - 1) * CHECK_EVERY]`` lie on its part already
-    passed, from its ``segment`` on, going ``way`` (``"back"`` or ``"round"``, :meth:`SelfOverlap.verdict`)."""
-    since = k - (CHECKS - 1) * CHECK_EVERY
+def _on_itself(way, since, segment, name, pts, earlier) -> str:
+    """Why a branch stopped whose points from about ``pts[since]`` lie on its part already passed, from its
+    ``segment`` on, going ``way`` (``"back"`` or ``"round"``, :meth:`SelfOverlap.verdict`)."""
     first = f"its point {earlier + since} ({name} = {pts[since]['param']:.6g})"
     onto = f"its points {earlier + segment} to {earlier + segment + 1} ({name} = {pts[segment]['param']:.6g})"
     if way == "back":

@@ -58,7 +58,6 @@ class CyclicSymmetry:
 
     def __init__(self, config, integrator):
         N, EO, g = reducible(config)
-        self.blades, self.engine_order = N, EO
         self.fraction = N // g                                   # d: the reduced map covers T / d
         self.turn = next(s for s in range(1, N) if (s * EO) % N == g)   # s
         S = int(integrator.steps_per_period)

@@ -159,8 +159,9 @@ class PeriodMap:
             raise ValueError(f"jacobian = 'tangent' needs one of blademodel's kernels, not {type(integrator).__name__}")
         self.integrator = integrator
         self.symmetry = symmetry
-        if symmetry is not None and int(periods) != 1:
-            raise ValueError(f"the cyclic reduction maps one period's orbits only, not periods = {periods!r}")
+        if symmetry is not None and (int(periods) != 1 or kernel != "contact"):
+            raise ValueError(f"the cyclic reduction maps one period's orbits on the per-contact kernel only, not "
+                             f"periods = {periods!r} on the {kernel or type(integrator).__name__} kernel")
         self._ig = integrator if symmetry is None else symmetry.reduced(integrator)   # the one that integrates
         self.periods = int(periods)
         self.n = integrator.n_physical

@@ -107,27 +107,28 @@ class SelfOverlap:
         best = int(np.argmin(ratio))
         return int(cand[best]) if ratio[best] <= NEAR else None
 
-    def verdict(self, k: int, weights: np.ndarray, step: float) -> str | None:
-        """At every :data:`CHECK_EVERY`-th point ``k``: ``"back"`` where this and the :data:`CHECKS` - 1 checks
-        before it found their points on segments ever earlier on the branch (a retrace), ``"round"`` where on
-        ever later ones (the branch came round onto itself), else None. Records this check's finding."""
+    def verdict(self, pts, weights: np.ndarray, step: float) -> tuple | None:
+        """At every :data:`CHECK_EVERY`-th point of the branch ``pts`` (its newest, ``k``, found by a step of scaled
+        length ``step``; the points kept first brought up to ``pts``, :meth:`sync`): ``(way, since, segment)``
+        where this check and the :data:`CHECKS` - 1 before it found their points on segments ever earlier on the
+        branch (``way`` ``"back"``, a retrace) or ever later (``"round"``, the branch came round onto itself),
+        ``since`` the first of those points and ``segment`` the one it lies on; else None."""
+        k = len(pts) - 1
         if k % CHECK_EVERY:
             return None
+        self.sync(pts, weights)
         hit = self.segment_under(k, weights, step)
         if hit is None:
             self._hits.pop(k, None)
             return None
         self._hits[k] = hit
-        seq = [self._hits.get(k - j * CHECK_EVERY) for j in range(CHECKS - 1, -1, -1)]
+        since = k - (CHECKS - 1) * CHECK_EVERY
+        seq = [self._hits.get(i) for i in range(since, k + 1, CHECK_EVERY)]
         if any(s is None for s in seq):
             return None
         steps = np.diff(seq)
         if np.all(steps < 0):
-            return "back"
+            return "back", since, seq[0]
         if np.all(steps > 0):
-            return "round"
+            return "round", since, seq[0]
         return None
-
-    def first_on(self, k: int) -> int:
-        """The segment the first of the checks in a row ending at point ``k`` found its point on."""
-        return self._hits[k - (CHECKS - 1) * CHECK_EVERY]
