@@ -88,12 +88,50 @@ def test_a_continuation_on_the_reduced_map_has_the_whole_map_s_orbits_and_bifurc
         assert cyc.events[k] == P.last_events
 
 
-def test_where_the_reduced_map_stalls_the_whole_map_takes_the_branch_past_it(monkeypatch):
-    """At 292.725 rad/s a switching time of the tuned 24-blade ring passes the reduced map's section (events
-    ``1.7e-9 T / 8`` after it) and the reduced continuation stalls; the whole map takes the branch on for ten
-    points, and the reduced map from there to the end, the message saying where. Each part resumes the last:
-    every point is an orbit of the whole map."""
+def _whole_map_residual(cfg, b, k) -> float:
+    """Point ``k`` of branch ``b``: the scaled residual of its state under the whole period's map."""
+    scale = np.maximum(np.abs(b.states).max(axis=0), 1e-12)
+    ig = make_integrator(apply_overrides(cfg, {"omega": float(b.params[k])}).build())
+    end, _ = PeriodMap(ig, 1)(b.states[k], b.modes[k].copy())
+    return float(np.max(np.abs(end - b.states[k]) / scale))
+
+
+def test_where_a_switching_time_passes_the_section_the_reduced_map_goes_on(monkeypatch):
+    """At 292.725 rad/s three contacts of the tuned 24-blade ring (one a wave) open just as the reduced map's
+    section passes (``1.7e-9 T / 8`` after it, and then before it): the branch's start modes change there from
+    slip to open. Newton's iterates on either side of that switching time are settled
+    (``ContactIntegrator.settle``), so the map is continuous across it and the reduced map steps over it
+    alone; every point checked, on both sides, is an orbit of the whole map."""
     from blademodel.orbits import arclength as al
+    parts = []
+    segment = al._segment
+
+    def recorded(*args, **kwargs):
+        b = segment(*args, **kwargs)
+        parts.append(kwargs["cyclic"])
+        return b
+
+    monkeypatch.setattr(al, "_segment", recorded)
+    cfg = load_config(MODELS / "bladed_disk_24.yaml")
+    b = continuation(cfg, "omega", 292.4, 293.2, workers=1, cyclic=True)
+    assert b.message == "reached omega = 293.2" and parts == [True]
+    changed = np.flatnonzero(b.modes[0] != b.modes[-1])
+    assert changed.tolist() == [5, 13, 21] and (b.modes[-1][changed] == 0).all()
+    k = int(np.flatnonzero((b.modes == b.modes[-1]).all(axis=1))[0])   # the first point past the switching
+    assert b.params[k - 1] < 292.725 < b.params[k]
+    for i in (0, k - 1, k, b.params.size - 1):
+        assert _whole_map_residual(cfg, b, i) <= 1e-8
+
+
+def test_where_the_reduced_map_stalls_the_whole_map_takes_the_branch_past_it(monkeypatch):
+    """Where the reduced continuation stalls, the whole map takes the branch on for ten points, and the reduced
+    map from there to the end, the message saying where. The stall is the one at 292.725 rad/s from before start
+    states were settled (the start states left unsettled here). Each part resumes the last: every point is an
+    orbit of the whole map."""
+    from blademodel.numeric.contact_kernel import ContactIntegrator
+    from blademodel.orbits import arclength as al
+    monkeypatch.setattr(ContactIntegrator, "settle", lambda self, y, mode, t=0.0: (
+        np.array(mode, dtype=np.int64).reshape(self.nc), []))
     parts = []
     segment = al._segment
 
@@ -108,11 +146,8 @@ def test_where_the_reduced_map_stalls_the_whole_map_takes_the_branch_past_it(mon
     assert b.message.startswith("reached omega = 293.2 (the cyclic reduction stalled at omega = 292.72")
     assert [c for c, _, _ in parts] == [True, False, True]
     assert parts[0][2].startswith(al.STALLED) and parts[1][1] == parts[0][1] + al.CYCLIC_FALLBACK_POINTS
-    scale = np.maximum(np.abs(b.states).max(axis=0), 1e-12)
     for k in (parts[0][1] - 1, parts[0][1] + 3, b.params.size - 1):
-        ig = make_integrator(apply_overrides(cfg, {"omega": float(b.params[k])}).build())
-        end, _ = PeriodMap(ig, 1)(b.states[k], b.modes[k].copy())
-        assert np.max(np.abs(end - b.states[k]) / scale) <= 1e-8
+        assert _whole_map_residual(cfg, b, k) <= 1e-8
 
 
 @pytest.mark.parametrize("values, field", [

@@ -225,3 +225,56 @@ def initial_modes(t, y, cm, I, R, WI, WF, G, counters, max_pivots, e, ei):
             factor_stick(cm, I, R, WI, WF)  # noqa: F821
     return settle_event(t, y, cm, I, R, WI, WF, G, counters, max_pivots, e, ei, ei, ei, ei,  # noqa: F821
                         runtime(False))
+
+
+def settle_start(t, y, cm, I, R, WI, WF, G, counters, max_pivots, log_t, log_c, log_g, log_from, log_to):
+    """Fire, at ``(t, y)``, the guards of ``cm`` that already lie on the side their mode forbids; then the
+    friction problem of the rigid contacts (the whole model). Logged; returns the log entries written, or -1
+    where the friction problem was not resolved.
+
+    The loop fires a guard when it *crosses* zero within a step. A start state already
+    past one (a section state on the far side of a switching boundary of ``cm``: a
+    Newton iterate, where the orbit's switching time passes the section) would
+    otherwise keep ``cm``'s flow, a contact closed in tension or stuck beyond its
+    friction limit, and the period map would jump there. Fired at once, the map is
+    continuous across the boundary. Each contact fires once, as in an event; what its
+    new mode leaves unsettled is the friction problem's (``settle_event``).
+    """
+    set_full(WI)  # noqa: F821
+    nc = I[H_NC]
+    claw, cm0, fired = vec(I, I, O_CLAW, nc), wvec(WI, nc, WC_CM0), wvec(WI, nc, WC_FIRED)  # noqa: F821
+    for j in range(nc):
+        cm0[j] = cm[j]
+        fired[j] = 0
+    start = counters[C_LOGGED]
+    factor_stick(cm, I, R, WI, WF)  # noqa: F821
+    any_fired = False
+    for _ in range(nc + 1):
+        eval_guards(t, y, cm, I, R, WI, WF, G)  # noqa: F821
+        code = -1
+        for j in range(nc):
+            if fired[j] != 0 or code >= 0:
+                continue
+            K = claw[j]
+            for gi in range(NG[K, cm[j]]):  # noqa: F821
+                if wrong_side(G[j, gi], GDIR[K, cm[j], gi]):  # noqa: F821
+                    code = j * GMAX + gi  # noqa: F821
+                    break
+        if code < 0:
+            break
+        j = code // GMAX  # noqa: F821
+        gi = code - j * GMAX  # noqa: F821
+        old = cm[j]
+        cm[j] = apply_transition(t, y, cm, j, gi, I, R, WI, WF, G)
+        WF[I[F_TLAST] + j] = t
+        log_event(t, j, gi, old, cm[j], log_t, log_c, log_g, log_from, log_to, counters, True, fired)
+        factor_stick(cm, I, R, WI, WF)  # noqa: F821
+        any_fired = True
+    if not any_fired:
+        for j in range(nc):
+            fired[j] = 0
+        return 0
+    if not settle_event(t, y, cm, I, R, WI, WF, G, counters, max_pivots, log_t, log_c, log_g, log_from, log_to,
+                        True):
+        return -1
+    return counters[C_LOGGED] - start

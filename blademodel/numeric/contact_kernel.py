@@ -417,6 +417,41 @@ class ContactIntegrator(Integrator):
                 raise RuntimeError("the friction problem of the initial state was not resolved")
         return cm
 
+    def settle(self, y: np.ndarray, mode, t: float = 0.0) -> tuple[np.ndarray, list]:
+        """The modes ``y`` starts in at ``t``: ``mode`` with every guard already on the side its mode forbids
+        fired, and the friction problem of the rigid contacts solved (``contact_events.settle_start``).
+
+        ``y`` may be reset in place (a transition's reset, the stick projection). A call of
+        :meth:`advance` that starts from ``(y, modes)`` at ``t`` goes on with the marks the
+        settling left (contacts a rounding error past a guard of their new mode).
+
+        Returns
+        -------
+        modes : ndarray of int
+        events : list of ``(contact, guard, from, to)``
+            In the order they fired; ``guard`` ``-1`` for a mode the friction problem set.
+
+        Raises
+        ------
+        RuntimeError
+            Where the friction problem was not resolved.
+        """
+        cm = np.array(mode, dtype=np.int64).reshape(self.nc)
+        self._clear_near_marks()
+        if not self.nc:
+            return cm, []
+        log = self.log_buffer(2 * self.nc)
+        counters = np.zeros(N_COUNTERS, dtype=np.int64)
+        k = int(self.module.settle_start(float(t), y, cm, self.I, self.R, self.WI, self.WF, self.GS[0], counters,
+                                         self.max_pivots, *log))
+        if k < 0:
+            raise RuntimeError(f"the friction problem of the state at t = {t:.6g} was not resolved")
+        if k == 0:
+            return cm, []
+        self._run_end = (float(t), y.copy(), cm.copy())   # advance keeps the marks from here
+        _, lc, lg, lf, lto = log
+        return cm, [(int(lc[i]), int(lg[i]), int(lf[i]), int(lto[i])) for i in range(min(k, lc.shape[0]))]
+
     def _own_work_arrays(self) -> None:
         self.WI, self.WF, self.SC, self.GS = self.WI.copy(), self.WF.copy(), self.SC.copy(), self.GS.copy()
         self._clear_near_marks()

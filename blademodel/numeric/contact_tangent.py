@@ -484,6 +484,42 @@ class ContactTangent:
             V = Vn
         return V
 
+    def settle_jacobian(self, y, cm, events) -> np.ndarray:
+        """``d y+ / d y`` of the transitions a start state's settling fired at ``t = 0``
+        (:meth:`~blademodel.numeric.contact_kernel.ContactIntegrator.settle`): physical states by physical states.
+
+        Fired at the fixed time 0 because the start lies past their guards, they move no
+        event time: only their resets and the stick projection of the contacts they send
+        to stick are differentiated, as at an event (:meth:`_cluster_step`).
+
+        Parameters
+        ----------
+        y : ndarray
+            The full state before the settling.
+        cm : ndarray
+            The modes before it.
+        events : list of ``(contact, guard, from, to)``
+        """
+        n = self.n
+        rows = np.arange(n)
+        cm = np.asarray(cm, dtype=np.int64)
+        cm2 = cm.copy()
+        ye = np.asarray(y, dtype=float).copy()
+        D = np.eye(n)
+        for j, gi, frm, to in events:
+            if cm2[j] != frm:
+                raise ContactTangentError(f"the settling's log disagrees with the modes at contact {j}")
+            if gi >= 0:
+                self._factor(cm2)
+                Rj, ye = self._reset_jacobian(0.0, ye, cm2, j, gi, rows)
+                if Rj is not None:
+                    D = Rj @ D
+            cm2[j] = to
+        if any(self._rigid_stick(j, cm2[j]) and not self._rigid_stick(j, cm[j]) for j in range(self.nc)):
+            stick = [j for j in range(self.nc) if self._rigid_stick(j, cm2[j])]
+            D = self._projection_block(stick, rows) @ D
+        return D
+
     def _cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H):
         """The rows ``rows`` of a step's tangent through the cluster's ``events`` (log indices, in time order);
         ``in_cluster``: the contacts whose coordinates are in ``rows``."""

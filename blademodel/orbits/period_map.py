@@ -33,7 +33,7 @@ class MapRun:
     mode : int or ndarray
         The settled start mode.
     fired : list
-        The transitions :func:`settle` fired at ``t = 0``.
+        The transitions :func:`settle` fired at ``t = 0`` (as it appends them).
     end : ndarray
         The full end state.
     mode_end : int or ndarray
@@ -266,6 +266,8 @@ class PeriodMap:
             if self._contact_tangent is None:
                 self._contact_tangent = ContactTangent(ig)
             M = self._contact_tangent.monodromy(r.t, r.states, r.modes, r.log, r.n_log)   # or ContactTangentError
+            if r.fired:
+                M = M @ self._contact_tangent.settle_jacobian(*r.fired[0])
             if self.symmetry is not None:
                 M = self.symmetry.jacobian(M)
             return FlowSensitivity(state=r.end[:self.n].copy(), mode=_copy(r.mode_end), monodromy=M, parameter=None,
@@ -411,11 +413,27 @@ def settle(integrator, y, mode, fired: list | None = None):
     already lies past one (a section state on the far side of a stick-slip or contact
     boundary of ``mode``) would otherwise follow ``mode``'s flow. Firing it makes the
     period map continuous across the boundary, which shooting and continuation cross
-    when the orbit's switching time passes the section. The product-mode kernel only:
-    the per-contact kernel's guard functions are not callable from Python, and there
-    the mode is taken as given. ``y`` may be reset in place (a transition's reset);
-    each transition fired is appended to ``fired`` as ``(mode, guard, target, state before)``.
+    when the orbit's switching time passes the section. ``y`` may be reset in place (a
+    transition's reset, the stick projection). On the product-mode kernel each transition
+    fired is appended to ``fired`` as ``(mode, guard, target, state before)``; on the
+    per-contact kernel (:meth:`~blademodel.numeric.contact_kernel.ContactIntegrator.settle`,
+    which also solves the friction problem) one entry, ``(state before, modes before,
+    events)``, where any fired.
+
+    Raises
+    ------
+    FlowError
+        Where the per-contact kernel's friction problem was not resolved.
     """
+    if getattr(integrator, "kernel", "") == "contact":
+        before, cm_before = y.copy(), np.array(mode, dtype=np.int64)
+        try:
+            cm, events = integrator.settle(y, mode)
+        except RuntimeError as e:
+            raise FlowError(str(e)) from None
+        if events and fired is not None:
+            fired.append((before, cm_before, events))
+        return cm
     if isinstance(mode, np.ndarray) or not hasattr(integrator, "module"):
         return mode
     mod = integrator.module
