@@ -30,7 +30,8 @@ def test_the_reduced_map_gives_the_ring_s_orbit_its_run_over_the_period_and_its_
     the reduced run rebuilds the whole period's; ``S^(-s d) J^d`` from the reduced map's tangent is the whole map's
     monodromy (the replayed tangents of two integrations, over ``T`` and over ``T / d``, in different
     roundings); the reduced map's tangent equals its difference quotients. Without the turn the reduced map does
-    not hold the orbit."""
+    not hold the orbit. Taken as an orbit of two periods (``CyclicSymmetry(periods=2)``), the rebuilt run is the
+    whole map's over ``2 T`` and ``(S^(-s d) J^d)^2`` its period-2 monodromy."""
     cfg = BladedDisk(blades=blades, engine_order=engine_order, friction=friction, omega=286.0)
     model = cfg.build()
     ig = make_integrator(model, steps_per_period=SPP)
@@ -54,6 +55,15 @@ def test_the_reduced_map_gives_the_ring_s_orbit_its_run_over_the_period_and_its_
     Jd = reduced.differences(y, cm.copy(), orbit.scale, rel_step=1e-5)
     S = orbit.scale[None, :] / orbit.scale[:, None]
     assert np.max(np.abs((Jd - J) * S)) <= 1e-5 * np.max(np.abs(J * S))
+    # the same wave as an orbit of two periods: its run over 2 T and the monodromy of the period-2 map
+    sym2 = CyclicSymmetry(cfg, ig, periods=2)
+    assert sym.comes_back(y, orbit.scale) <= 1e-10 and sym2.comes_back(y, orbit.scale) <= 1e-10
+    r2 = PeriodMap(ig, 1, symmetry=sym2).run(y, cm.copy())
+    whole2 = PeriodMap(ig, 2)
+    M2 = whole2.derivatives(y, cm.copy()).monodromy
+    np.testing.assert_allclose(r2.period_orbit(), whole2.last_run.Y, rtol=0,
+                               atol=1e-10 * np.max(np.abs(rw.Y)))
+    assert np.linalg.norm(sym2.monodromy(J) - M2) <= 1e-7 * np.linalg.norm(M2)
 
 
 def test_a_continuation_on_the_reduced_map_has_the_whole_map_s_orbits_and_bifurcations():
@@ -175,7 +185,8 @@ def test_the_reduced_map_needs_whole_steps_and_a_ring():
 def test_the_continue_command_with_cyclic(tmp_path, capsys):
     """``blademodel continue --cyclic``: the branch on the reduced map, saved and reported as any (its events of
     the whole period); without it, a tuned ring gets a hint that it may be used (a mistuned one none); refused on a
-    mistuned ring (exit code 2, naming the field) and with ``--switch``."""
+    mistuned ring (exit code 2, naming the field); taken with ``--switch`` (whose branches run on the whole map:
+    ``test_a_period_doubling_found_on_the_reduced_map_is_switched_on_the_whole_one``)."""
     import json
 
     from blademodel.cli import main
@@ -201,6 +212,43 @@ def test_the_continue_command_with_cyclic(tmp_path, capsys):
     assert main(["continue", yaml, "--param", "omega", "--from", "280", "--to", "280.05", "--workers", "1",
                  "--set", "mistuning_std=0.02", "--max-points", "3"]) == 0
     assert "hint" not in capsys.readouterr().err   # a mistuned ring gets no hint
-    assert main(["continue", yaml, "--param", "omega", "--from", "280", "--to", "280.4", "--cyclic",
-                 "--switch"]) == 2
-    assert "--switch" in capsys.readouterr().err
+    assert main(["continue", yaml, "--param", "omega", "--from", "280", "--to", "280.4", "--cyclic", "--switch",
+                 "--json", "--workers", "1"]) == 0   # no period doubling here: nothing to switch to, and no refusal
+    assert json.loads(capsys.readouterr().out)["message"] == "reached omega = 280.4"
+
+
+@pytest.mark.slow
+def test_a_period_doubling_of_the_96_blade_ring_is_followed_on_the_reduced_map():
+    """The tuned 96-blade ring (engine order 12: T / 8, a turn by 1 blade, ``S = 600``) has a period doubling near
+    272.27 rad/s where the reduced map has a branch point (``J`` with the eigenvalue +1). Its doubled orbits come
+    back after one period turned by ``s d = 8`` blades, ``Phi_T(y) = S^(-8) y``, and are fixed points of the
+    reduced map: the doubled branch followed there takes the same values of the field as on the whole ring's
+    period-2 map (to 1e-6 rad/s), and each point is an orbit of the whole period-2 map (residual below 1e-8) and
+    not of the period-1 map, with the multipliers of the whole period-2 map's monodromy, its amplitudes over
+    ``2 T`` and its events."""
+    from blademodel.orbits import period_doubled_branch
+    cfg = apply_overrides(load_config(MODELS / "bladed_disk_24.yaml"), {"blades": "96", "engine_order": "12"})
+    b = continuation(cfg, "omega", 272.0, 272.6, workers=1, cyclic=True, steps_per_period=600)
+    (pd,) = b.points("period-doubling")
+    kw = dict(steps_per_period=600, workers=1, max_points=4)
+    d = period_doubled_branch(cfg, "omega", pd, 271.5, 273.0, cyclic=True, **kw)
+    whole = period_doubled_branch(cfg, "omega", pd, 271.5, 273.0, **kw)
+    assert "whole ring's map" not in d.message and d.periods == whole.periods == 2
+    np.testing.assert_allclose(d.params, whole.params, rtol=0, atol=1e-6)
+    assert d.params[0] == pd.param and np.allclose(d.states[0], pd.state)
+    scale = np.maximum(np.abs(d.states).max(axis=0), 1e-12)
+    for k in range(1, d.params.size):
+        ig = make_integrator(apply_overrides(cfg, {"omega": float(d.params[k])}).build(), steps_per_period=600)
+        y, m = d.states[k], d.modes[k]
+        P2 = PeriodMap(ig, 2)
+        s = P2.derivatives(y, m.copy())
+        end1, _ = PeriodMap(ig, 1)(y, m.copy())
+        assert np.max(np.abs(s.state - y) / scale) <= 1e-8 and np.max(np.abs(end1 - y) / scale) > 1e-3
+        turn = CyclicSymmetry(cfg, ig).monodromy(np.eye(y.size))   # S^(-s d)
+        assert np.max(np.abs(end1 - turn @ y) / scale) <= 1e-8
+        mu = np.sort(np.abs(np.linalg.eigvals(s.monodromy)))[::-1][:6]
+        np.testing.assert_allclose(mu, np.sort(np.abs(d.multipliers[k]))[::-1][:6], rtol=0, atol=1e-6)
+        Y = P2.last_run.Y
+        np.testing.assert_allclose(d.amplitudes[k], 0.5 * (Y.max(axis=0) - Y.min(axis=0)), rtol=1e-7,
+                                   atol=1e-9 * np.max(np.abs(Y)))
+        assert d.events[k] == P2.last_events

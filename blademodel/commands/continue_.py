@@ -45,7 +45,8 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--cyclic", action="store_true",
                    help="a tuned bladed disk under engine-order excitation: follow its travelling-wave orbits on "
                         "the map over T / d reduced by their symmetry (d = N / gcd(EO, N); 8 times fewer steps on "
-                        "24 blades at engine order 3), the whole ring's multipliers from it (docs/orbits.md)")
+                        "24 blades at engine order 3), the whole ring's multipliers from it (docs/orbits.md); "
+                        "with --switch, the period-doubled branches on the whole ring's map")
     p.add_argument("--switch", action="store_true",
                    help="also follow the period-doubled branch born at each period doubling found "
                         "(saved beside --out as FILE_pd1.nc, ...; drawn on the same --plot)")
@@ -150,9 +151,6 @@ def run(args: argparse.Namespace) -> int:
     if not args.cyclic and not args.json:
         _hint_cyclic(config, args.period)
     if args.cyclic:
-        if args.switch:
-            raise ValueError("--cyclic follows travelling waves of period 1: a period-doubled branch (--switch) "
-                             "needs the whole ring's map; drop one of them")
         run_settings["cyclic"] = True   # (files written without it stay this command's own without it)
     shared = dict(max_points=args.max_points, ds_max=args.ds_max, tol=args.tol, grazing_tol=args.grazing_tol,
                   steps_per_period=args.steps_per_period, event_tol=args.event_tol, method=args.method,
@@ -180,7 +178,7 @@ def run(args: argparse.Namespace) -> int:
                     return continuation(config, args.param, args.start, args.stop, periods=2 * args.period,
                                         resume=resume, **shared, **kw)
                 return period_doubled_branch(config, args.param, pd, args.start, args.stop, periods=args.period,
-                                             **shared, **kw)
+                                             cyclic=args.cyclic, **shared, **kw)
             try:
                 doubled.append(_continued(name, config, {**run_settings, "doubling": k},
                                           f"period-doubled branch {k}", args.param, switched))

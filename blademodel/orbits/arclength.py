@@ -285,8 +285,9 @@ class _Family:
             if len(self._cache) > 8:
                 old = self._cache.pop(next(iter(self._cache)))
                 self._dropped = (self._dropped[0] + old.evaluations, self._dropped[1] + old.replays)
-            self._cache[key] = PeriodMap(self._integrator_at(key), self.periods, self.jacobian, self.workers,
-                                         symmetry=self.symmetry)
+            # reduced, the map covers T / d; the orbits' period (self.periods) is the symmetry's
+            self._cache[key] = PeriodMap(self._integrator_at(key), 1 if self.symmetry else self.periods,
+                                         self.jacobian, self.workers, symmetry=self.symmetry)
         return self._cache[key]
 
     def state_names(self) -> list:
@@ -506,10 +507,8 @@ def _segment(config, name: str, start: float, stop: float, *, periods, guess, mo
     fam = _Family(config, name, periods, settings, at, jacobian, bounds=(start, stop), workers=workers)
     P0 = fam.map_at(at)
     if cyclic:
-        from .cyclic import CyclicError, CyclicSymmetry
-        if periods != 1:
-            raise CyclicError(f"the cyclic reduction maps one period's orbits only, not periods = {periods}")
-        fam.reduce_by(CyclicSymmetry(fam.config_at(at), P0.integrator))
+        from .cyclic import CyclicSymmetry
+        fam.reduce_by(CyclicSymmetry(fam.config_at(at), P0.integrator, periods=periods))
     if resume is not None:
         mode = _last_mode(resume, P0.integrator)
     try:
@@ -554,6 +553,12 @@ def _travelling_wave(ctx, X, mode, name, at):
         raise CyclicError(f"the first orbit at {name} = {at:g} is no travelling wave: turned by the symmetry it is "
                           f"{off:.3g} (scaled) from itself; start where the ring's orbit is one (another start, "
                           f"guess or transient), or continue without the cyclic reduction")
+    sym = ctx.fam.symmetry
+    back = sym.comes_back(Xc[:-1] * ctx.scale, ctx.scale)
+    if back > 1e-6:
+        raise CyclicError(f"the first orbit at {name} = {at:g} comes back after {sym.periods} period(s) turned by "
+                          f"{sym.turn * sym.fraction * sym.periods % sym.blades} blades ({back:.3g} scaled from "
+                          f"itself): it is no orbit of that period")
     return Xc, mc
 
 
@@ -597,7 +602,7 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
                           jacobian: str = "auto", workers: int | None = None,
                           progress: Callable[[int, float], None] | None = None,
                           checkpoint: Callable[[Branch], None] | None = None,
-                          checkpoint_every: float = 30.0) -> Branch:
+                          checkpoint_every: float = 30.0, cyclic: bool = False) -> Branch:
     """The branch of period-``2 periods`` orbits born at a period doubling of a period-``periods`` branch.
 
     At a period doubling the map over ``periods`` excitation periods has the multiplier
@@ -610,6 +615,17 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
     until the field leaves ``[start, stop]``. The branch's first point is the bifurcation
     itself (on the old orbit); a supercritical doubling sends the new branch to the
     side where the old orbits are unstable, a subcritical one to the other.
+
+    On a tuned ring (the point from any branch of travelling waves) with ``cyclic``, the
+    doubling is looked at on the map reduced by the ring's symmetry (:mod:`.cyclic`):
+    where that map's Jacobian ``J`` has the eigenvalue ``+1`` there (``M = S^(-s d) J^d``
+    shows it as ``-1`` on a perturbation that the turn by ``s d`` blades reverses), the
+    reduced map has a branch point, and the doubled orbits, which come back after one
+    period turned by ``s d`` blades, are its fixed points: the switch is a step along
+    that eigenvector on the reduced map, and the branch is followed there, with ``d``
+    times fewer steps a period than on the whole ring's map and half as many periods.
+    Otherwise the whole ring's map is used, as without ``cyclic``, and the branch's
+    message says so.
 
     Parameters
     ----------
@@ -625,12 +641,17 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
         As for :func:`continuation`; ``ds`` is also the switch's step along ``v``.
     steps_per_period, event_tol, method, kernel, jacobian, workers, progress, checkpoint, checkpoint_every
         As for :func:`continuation`.
+    cyclic : bool
+        Follow the new branch on the reduced map where it can be (above); ``periods`` must
+        then be 1.
 
     Returns
     -------
     Branch
         With ``periods`` twice the old branch's; resumed, if unfinished, by
-        :func:`continuation` with ``periods`` twice the old branch's and ``start, stop``.
+        :func:`continuation` with ``periods`` twice the old branch's and ``start, stop``
+        (and ``cyclic`` where it was followed on the reduced map: its message does not say
+        the whole map took it).
 
     Raises
     ------
@@ -660,11 +681,15 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
         mode = ig.mode_of(full)
     scale = _state_scale(_orbit_samples(ig, y, mode, 2 * periods)[1], _n_coordinates(ig))
     old = PeriodMap(ig, periods, jacobian, workers)   # the period-``periods`` map
-    J1 = old.jacobian(y, _copy(mode), scale, rel_step)
-    mu, V = np.linalg.eig(J1)
-    k = int(np.argmin(np.abs(mu + 1.0)))
-    v = np.real(V[:, k]) / scale
-    v /= np.linalg.norm(v)
+    v, whole = None, ""
+    if cyclic:
+        v, whole = _reduced_branch_point(fam, ig, point, y, mode, scale, rel_step, periods)
+    if v is None:
+        J1 = old.jacobian(y, _copy(mode), scale, rel_step)
+        mu, V = np.linalg.eig(J1)
+        k = int(np.argmin(np.abs(mu + 1.0)))
+        v = np.real(V[:, k]) / scale
+        v /= np.linalg.norm(v)
     ctx = _Context(fam, scale, span, tol, rel_step, max_corrections, grazing_tol)
     X0 = np.append(y / scale, point.param / span)
     A0 = ctx.jacobian(X0, mode)
@@ -684,8 +709,38 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
     pts = [ctx.point(X0, mode, A0), ctx.point(X1, m1, A1)]
     X, T, A = ctx.rescale(_state_scale(pts[-1]["Y"], _n_coordinates(ig)), X1, T1, A1)
     pts[-1]["X"], pts[-1]["A"] = X, A
-    return _run(ctx, pts, X, T, m1, A, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points,
-                locate_tol=locate_tol, progress=progress, checkpoint=checkpoint, checkpoint_every=checkpoint_every)
+    b = _run(ctx, pts, X, T, m1, A, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points,
+             locate_tol=locate_tol, progress=progress, checkpoint=checkpoint, checkpoint_every=checkpoint_every)
+    return replace(b, message=f"{b.message} ({whole})") if whole else b
+
+
+#: How close to ``+1`` the reduced map's Jacobian must have an eigenvalue at a period doubling for the doubled
+#: branch to be followed on the reduced map (:func:`period_doubled_branch`): the doubling is located to
+#: ``locate_tol``, so the eigenvalue lies far closer.
+BRANCH_POINT_TOL = 1e-3
+
+
+def _reduced_branch_point(fam, ig, point, y, mode, scale, rel_step, periods) -> tuple:
+    """For :func:`period_doubled_branch` with ``cyclic``: the direction (scaled, unit) along which the doubled
+    branch leaves the reduced map's branch point, ``fam`` reduced from then on; or ``(None, why)`` where the whole
+    map must take it (``fam`` left as it is)."""
+    from .cyclic import CyclicError, CyclicSymmetry
+    if periods != 1:
+        raise CyclicError(f"the cyclic reduction follows the doubling of period-1 orbits, not of periods = {periods}")
+    sym = CyclicSymmetry(fam.config_at(point.param), ig, periods=2)
+    G = PeriodMap(ig, 1, fam.jacobian, fam.workers, symmetry=sym)
+    off = float(np.max(np.abs(G(y, _copy(mode))[0] - y) / scale))
+    if off > 1e-6:
+        return None, (f"on the whole ring's map: the orbit at the doubling is no travelling wave ({off:.3g} scaled "
+                      f"from itself under the reduced map)")
+    lam, W = np.linalg.eig(G.jacobian(y, _copy(mode), scale, rel_step))
+    k = int(np.argmin(np.abs(lam - 1.0)))
+    if abs(lam[k] - 1.0) > BRANCH_POINT_TOL:
+        return None, (f"on the whole ring's map: the reduced map has no branch point there (its eigenvalue nearest "
+                      f"+1 is {complex(lam[k]):.4g}), so the doubled orbits break the reduction's symmetry")
+    v = np.real(W[:, k]) / scale
+    fam.reduce_by(sym)
+    return v / np.linalg.norm(v), ""
 
 
 def _run(ctx, pts, X, T, m, A, bounds, *, progress, checkpoint, checkpoint_every, before=None, **follow) -> Branch:
@@ -736,8 +791,8 @@ def _assemble(ctx, pts, special, message: str, before: Branch | None, complete: 
                states=np.array([p["state"] for p in pts]), multipliers=np.array([p["mu"] for p in pts]),
                stable=np.array([p["stable"] for p in pts], dtype=bool),
                amplitudes=np.array([p["amp"] for p in pts]), harmonics=np.array([p["h1"] for p in pts]),
-               events=np.array([p["events"] for p in pts], dtype=np.int64) * (fam.symmetry.fraction if fam.symmetry
-                                                                               else 1),
+               events=np.array([p["events"] for p in pts], dtype=np.int64) * (
+                   fam.symmetry.fraction * fam.symmetry.periods if fam.symmetry else 1),
                residuals=np.array([p["residual"] for p in pts]),
                sections=np.array([p["sections"] for p in pts]), special=list(special),
                state_names=fam.state_names()[:ctx.n], message=message, integrations=integrations,

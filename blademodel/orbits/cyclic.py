@@ -48,6 +48,14 @@ class CyclicSymmetry:
         its engine order not a multiple of its number of blades.
     integrator : ContactIntegrator
         Its integrator (the state's and contacts' names and order are read from it).
+    periods : int
+        The whole ring's period of the orbits followed, in excitation periods. A fixed
+        point ``y`` of the reduced map comes back after ``T`` turned, ``Phi(0 -> T)(y) =
+        S^(-s d) y``: a travelling wave of period ``T`` has ``S^(s d) y = y``; the
+        period-doubled orbits born where the reduced map has a branch point (``J`` with
+        the eigenvalue ``+1`` on a perturbation that ``S^(s d)`` reverses) have
+        ``S^(2 s d) y = y`` and period ``2 T`` (:meth:`comes_back`). The orbit's run and
+        monodromy are over ``periods`` excitation periods.
 
     Raises
     ------
@@ -56,8 +64,12 @@ class CyclicSymmetry:
         divide into the reduced map's.
     """
 
-    def __init__(self, config, integrator):
+    def __init__(self, config, integrator, periods: int = 1):
+        if int(periods) < 1:
+            raise ValueError(f"periods must be a whole number >= 1, got {periods!r}")
+        self.periods = int(periods)
         N, EO, g = reducible(config)
+        self.blades = N
         self.fraction = N // g                                   # d: the reduced map covers T / d
         self.turn = next(s for s in range(1, N) if (s * EO) % N == g)   # s
         S = int(integrator.steps_per_period)
@@ -70,7 +82,7 @@ class CyclicSymmetry:
         self.contact_index = _turned(list(integrator.meta["contacts"]), N, self.turn)    # contact modes
         # the slot each entry reaches after k turns, k = 0 .. d: rows of powers of the turn
         powers = [np.arange(self.n)]
-        for _ in range(self.fraction):
+        for _ in range(self.periods * self.fraction):
             powers.append(self.index[powers[-1]])
         self._powers = powers
 
@@ -107,16 +119,25 @@ class CyclicSymmetry:
         return J
 
     def monodromy(self, J: np.ndarray) -> np.ndarray:
-        """The ring's monodromy over a whole period, ``S^(-s d) J^d``, from the reduced map's Jacobian ``J``."""
-        return np.linalg.matrix_power(J, self.fraction)[self._powers[-1]]
+        """The ring's monodromy over the orbit's ``p = periods`` periods, ``S^(-s d p) J^(d p)``, from the reduced
+        map's Jacobian ``J`` at a fixed point (``G^(d p) = S^(s d p) Phi(0 -> p T)``). Not ``(S^(-s d) J^d)^p``
+        where ``p > 1``: ``S^(s d)`` does not leave such an orbit's state as it is, nor ``J`` with it."""
+        k = self.periods * self.fraction
+        return np.linalg.matrix_power(J, k)[self._powers[k]]
+
+    def comes_back(self, y: np.ndarray, scale: np.ndarray) -> float:
+        """How far ``S^(s d periods) y`` lies from ``y`` (the largest difference over ``scale``): zero for a fixed
+        point of the reduced map that is an orbit of ``periods`` excitation periods."""
+        y = np.asarray(y)[:self.n]
+        return float(np.max(np.abs(y[self._powers[-1]] - y) / scale))
 
     # --- the orbit over a whole period --------------------------------------------------------
     def whole_period(self, Y: np.ndarray) -> np.ndarray:
-        """The orbit over ``[0, T]`` from the reduced run's ``Y`` over ``[0, tau]`` (rows: steps, ``t = 0`` and
-        ``tau`` included; columns: physical states), each ``tau`` turned by ``s`` blades more: ``x_i(k tau + t) =
-        x_{i + k s}(t)``, whose entries are those that ``i``'s reach after ``k`` turns."""
+        """The orbit over ``[0, periods T]`` from the reduced run's ``Y`` over ``[0, tau]`` (rows: steps, ``t = 0``
+        and ``tau`` included; columns: physical states), each ``tau`` turned by ``s`` blades more: ``x_i(k tau + t)
+        = x_{i + k s}(t)``, whose entries are those that ``i``'s reach after ``k`` turns."""
         steps = Y.shape[0] - 1
-        d = self.fraction
+        d = self.periods * self.fraction
         out = np.empty((d * steps + 1, Y.shape[1]))
         for k in range(d):
             out[k * steps:(k + 1) * steps] = Y[:steps][:, self._powers[k]]
