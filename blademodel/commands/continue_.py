@@ -46,7 +46,8 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="a tuned bladed disk under engine-order excitation: follow its travelling-wave orbits on "
                         "the map over T / d reduced by their symmetry (d = N / gcd(EO, N); 8 times fewer steps on "
                         "24 blades at engine order 3), the whole ring's multipliers from it (docs/orbits.md); "
-                        "with --switch, the period-doubled branches on the whole ring's map")
+                        "with --switch, the period-doubled branches (on the reduced map where it has a branch point at "
+                        "the doubling, else on the whole ring's map)")
     p.add_argument("--switch", action="store_true",
                    help="also follow the period-doubled branch born at each period doubling found "
                         "(saved beside --out as FILE_pd1.nc, ...; drawn on the same --plot)")

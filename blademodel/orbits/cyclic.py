@@ -22,7 +22,12 @@ more: ``x_i(k tau + t) = x_{i + k s}(t)``.
 
 Only orbits that have the symmetry are found this way: a branch that breaks it (where a
 multiplier of ``M`` crosses the unit circle with an eigenvector of another symmetry) goes
-on as the travelling wave, and the branch it meets there is not followed.
+on as the travelling wave, and the branch it meets there is not followed on the reduced
+map. The one exception: at a period doubling where ``J`` itself has the eigenvalue ``+1``
+(on a perturbation that ``S^(s d)`` reverses), the doubled orbits are fixed points of
+``G`` that come back after one period turned by ``s d`` blades, and
+:func:`~blademodel.orbits.period_doubled_branch` follows them on ``G`` (``periods = 2``
+here: the run rebuilt over ``2 T``, the monodromy ``S^(-2 s d) J^(2 d)``).
 """
 
 from __future__ import annotations
