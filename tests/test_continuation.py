@@ -9,6 +9,7 @@ from blademodel.numeric import simulate
 from blademodel.numeric.kernels import make_integrator
 from blademodel.numeric.contract import C_EVENTS, N_COUNTERS
 from blademodel.orbits import PeriodMap, ShootingError, continuation, find_periodic_orbit, period_doubled_branch
+from blademodel.orbits.cyclic import CyclicError
 from linear_reference import forced_response
 
 
@@ -232,6 +233,8 @@ def test_the_period_doubled_branch_of_the_bilinear_pair():
     pd = b1.points("period-doubling")[0]
     b2 = period_doubled_branch(cfg, "gamma", pd, 7.0, 7.6)
     assert b2.periods == 2 and b2.params[0] == pd.param
+    with pytest.raises(CyclicError, match="bladed disk"):   # the pair has no ring's symmetry to reduce by
+        period_doubled_branch(cfg, "gamma", pd, 7.0, 7.6, cyclic=True)
     folds = b2.points("fold")
     assert folds and min(f.param for f in folds) < pd.param
     # every change of stability is a bifurcation, a multiplier on the unit circle: none is a jump to another arm

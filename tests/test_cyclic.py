@@ -225,7 +225,8 @@ def test_a_period_doubling_of_the_96_blade_ring_is_followed_on_the_reduced_map()
     reduced map: the doubled branch followed there takes the same values of the field as on the whole ring's
     period-2 map (to 1e-6 rad/s), and each point is an orbit of the whole period-2 map (residual below 1e-8) and
     not of the period-1 map, with the multipliers of the whole period-2 map's monodromy, its amplitudes over
-    ``2 T`` and its events."""
+    ``2 T`` and its events. Resumed with ``periods=2, cyclic=True`` (as ``blademodel continue --cyclic --switch``
+    resumes an unfinished doubled branch), it goes on on the reduced map from its last point."""
     from blademodel.orbits import period_doubled_branch
     cfg = apply_overrides(load_config(MODELS / "bladed_disk_24.yaml"), {"blades": "96", "engine_order": "12"})
     b = continuation(cfg, "omega", 272.0, 272.6, workers=1, cyclic=True, steps_per_period=600)
@@ -252,3 +253,9 @@ def test_a_period_doubling_of_the_96_blade_ring_is_followed_on_the_reduced_map()
         np.testing.assert_allclose(d.amplitudes[k], 0.5 * (Y.max(axis=0) - Y.min(axis=0)), rtol=1e-7,
                                    atol=1e-9 * np.max(np.abs(Y)))
         assert d.events[k] == P2.last_events
+    # resumed (as blademodel continue resumes an unfinished doubled branch), on the reduced map again
+    more = continuation(cfg, "omega", 271.5, 273.0, periods=2, cyclic=True, resume=d, **{**kw, "max_points": 6})
+    assert more.params.size > d.params.size and np.array_equal(more.params[:d.params.size], d.params)
+    ig = make_integrator(apply_overrides(cfg, {"omega": float(more.params[-1])}).build(), steps_per_period=600)
+    end2, _ = PeriodMap(ig, 2)(more.states[-1], more.modes[-1].copy())
+    assert np.max(np.abs(end2 - more.states[-1]) / scale) <= 1e-8

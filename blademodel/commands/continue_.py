@@ -12,6 +12,7 @@ import numpy as np
 
 from .. import interrupts
 from ..orbits import ContinuationInterrupted, FlowError, ShootingError, continuation, period_doubled_branch
+from ..orbits.cyclic import CyclicError
 from ..progress import Progress
 from . import jsonout
 from .common import (add_jacobian_arguments, add_model_arguments, add_stepping_arguments, check_at_least_one,
@@ -114,7 +115,7 @@ def sweep_overlay(path, field: str, state_index: int, law: str | None = None) ->
 def _hint_cyclic(config, period: int) -> None:
     """On a tuned ring under engine-order excitation, say on stderr that ``--cyclic`` may follow its period-1 orbits
     on a fraction of the period."""
-    from ..orbits.cyclic import CyclicError, reducible
+    from ..orbits.cyclic import reducible
     if period != 1:
         return
     try:
@@ -176,6 +177,12 @@ def run(args: argparse.Namespace) -> int:
 
             def switched(resume, pd=pd, **kw):
                 if resume is not None:   # an unfinished period-doubled branch goes on as any branch
+                    if args.cyclic:   # on the reduced map where it was followed there (its orbits G's fixed points)
+                        try:
+                            return continuation(config, args.param, args.start, args.stop, periods=2 * args.period,
+                                                resume=resume, cyclic=True, **shared, **kw)
+                        except CyclicError:
+                            pass
                     return continuation(config, args.param, args.start, args.stop, periods=2 * args.period,
                                         resume=resume, **shared, **kw)
                 return period_doubled_branch(config, args.param, pd, args.start, args.stop, periods=args.period,
