@@ -189,15 +189,17 @@ class PeriodMap:
         if self._last is not None and self._last[0] == key:
             return self._last[1]
         full = np.zeros(ig.n_state)
-        full[:self.n] = y[:self.n]
-        fired: list = []
-        m0 = settle(ig, full, _copy(mode), fired)
-        start = full.copy()
         rec = ig.record_buffer(self.periods * ig.steps_per_period + 1)
         while True:
+            # settled again for each attempt: the per-contact kernel's run goes on with the marks its settling
+            # left (ContactIntegrator.settle), which a run before it has cleared
+            full[:] = 0.0
+            full[:self.n] = y[:self.n]
+            fired: list = []
+            m0 = settle(ig, full, _copy(mode), fired)
+            start = full.copy()
             counters = np.zeros(N_COUNTERS, dtype=np.int64)
             log = ig.log_buffer(self._log_size)
-            full[:] = start
             status, mode_end, t = ig.advance(full, _copy(m0), 0, self.periods, n_transient=0, record=rec, log=log,
                                              counters=counters, check=False)
             if status != 0:
