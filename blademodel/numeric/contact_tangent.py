@@ -134,6 +134,7 @@ class ContactTangent:
         self._factored = None   # the contact modes the stick problem in the work arrays is factored for
         self._blocks, self._cluster_sets, self._projections = caches["blocks"], caches["clusters"], caches["projections"]
         self._R = _Kept(KEEP_BYTES // 8)   # the step matrices R(hA) of this integrator's step
+        self._powers = _Kept(KEEP_BYTES // 8)   # their powers, for runs of whole steps without events
         self._G = np.zeros_like(integrator.GS[0])
         self._rows = [self._contact_rows(j) for j in range(self.nc)]
         self._tableau = tuple(np.ascontiguousarray(x, dtype=float) for x in (method.A, method.b, method.c))
@@ -265,6 +266,27 @@ class ContactTangent:
                 M = self._R[key] = stability_matrix(h * self.flow_matrix(cm, y), self._poly)
             return M
         return stability_matrix(h * self._block(cm, y, rows), self._poly)
+
+    def _step_power(self, h: float, cm, y, m: int) -> np.ndarray:
+        """``R(hA)^m`` of the mode ``cm``: ``m`` whole steps (kept, with the powers of two it is made of)."""
+        if m == 1:
+            return self._step_matrix(h, cm, y)
+        key = (h, cm.tobytes(), m)
+        P = self._powers.get(key)
+        if P is None:
+            base, e, b = self._step_matrix(h, cm, y), m, 1
+            while e:
+                if e & 1:
+                    P = base if P is None else base @ P   # powers of one matrix commute
+                e >>= 1
+                if e:
+                    b *= 2
+                    square = self._powers.get((h, cm.tobytes(), b))
+                    if square is None:
+                        square = self._powers[(h, cm.tobytes(), b)] = base @ base
+                    base = square
+            self._powers[key] = P
+        return P
 
     def _substep_derivatives(self, t, y, h, cm, H, rows):
         """The method's sub-step of length ``h`` from ``(t, y)`` in ``cm``: its end (the full state) and, on the
@@ -457,11 +479,19 @@ class ContactTangent:
         H = float(rec_t[1] - rec_t[0])
         self.ig._clear_near_marks()   # guards without the kernel's offsets for early-fired contacts
         self._factored = None         # the kernel has used the work arrays since
-        for k in range(rec_t.shape[0] - 1):
+        steps = rec_t.shape[0] - 1
+        k = 0
+        while k < steps:
             t0, t1 = float(rec_t[k]), float(rec_t[k + 1])
             cm0 = rec_cm[k].astype(np.int64)
             if not (ie < n_log and lt[ie] <= t1):
-                V = self._step_matrix(H, cm0, rec_y[k]) @ V
+                # a run of whole steps without events in one mode: one product by R(hA) to the run's length
+                j = k + 1
+                while j < steps and not (ie < n_log and lt[ie] <= rec_t[j + 1]) and np.array_equal(rec_cm[j],
+                                                                                                   rec_cm[k]):
+                    j += 1
+                V = self._step_power(H, cm0, rec_y[k], j - k) @ V
+                k = j
                 continue
             i0 = ie
             while ie < n_log and lt[ie] <= t1:
@@ -482,6 +512,7 @@ class ContactTangent:
                 events = [i for i in order if int(lc[i]) in contacts]
                 Vn[rows] = self._cluster_step(V[rows], rows, contacts, events, log, t0, t1, rec_y[k], cm0, H)
             V = Vn
+            k += 1
         return V
 
     def settle_jacobian(self, y, cm, events) -> np.ndarray:
