@@ -79,7 +79,8 @@ def test_a_start_past_a_guard_ends_as_the_flow_that_crossed_it(friction, guard, 
     """The tuned 4-blade ring's orbit at 286 rad/s, two steps after a contact closed (in slip) or opened (the
     bilinear law's state reset to zero), given the modes from before. Settled, the start takes the modes that
     the flow took and the map ends where it ends from them; its tangent is the difference quotients of the
-    settled map (for the opening, the reset's Jacobian), and so the tangent from those modes. Unsettled, the
+    settled map, and so the tangent from those modes (the opening's reset of the law state is differentiated,
+    though its closing again later in the period makes it moot for the map). Unsettled, the
     contact would stay open and penetrating, or closed in tension: another end altogether."""
     ig, orbit = ring_orbit(friction)
     y, right, wrong, j = _past_an_event(ig, orbit, guard, frm, to)
