@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 
 import numpy as np
 
@@ -25,12 +24,6 @@ import _common as C  # noqa: E402
 
 from blademodel.config import apply_overrides, load_config  # noqa: E402
 from blademodel.orbits import continuation  # noqa: E402
-
-
-def branch(cfg, start, stop, cyclic):
-    t = time.thread_time()
-    b = continuation(cfg, "omega", start, stop, workers=1, cyclic=cyclic, max_points=2000)
-    return time.thread_time() - t, b
 
 
 def main() -> int:
@@ -43,13 +36,12 @@ def main() -> int:
     C.print_load("start")
     cfg = apply_overrides(load_config(C.ROOT / "models" / "bladed_disk_24.yaml"), {"blades": str(args.blades)})
     continuation(cfg, "omega", args.start, args.start + 0.05, workers=1, max_points=3)   # compile, warm caches
-    times = {False: [], True: []}
     out = {}
-    for _ in range(args.repeats):
-        for cyclic in (False, True):
-            t, b = branch(cfg, args.start, args.stop, cyclic)
-            times[cyclic].append(t)
-            out[cyclic] = b
+
+    def branch(cyclic):
+        out[cyclic] = continuation(cfg, "omega", args.start, args.stop, workers=1, cyclic=cyclic, max_points=2000)
+
+    times = C.interleaved({False: lambda: branch(False), True: lambda: branch(True)}, args.repeats)
     whole, cyc = out[False], out[True]
 
     def bifurcations(b):

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 
 import numpy as np
 
@@ -38,14 +37,13 @@ def main() -> int:
                           {"blades": "96", "engine_order": "12"})
     b = continuation(cfg, "omega", 272.0, 272.6, workers=1, cyclic=True, steps_per_period=600)
     (pd,) = b.points("period-doubling")
-    times = {False: [], True: []}
     out = {}
-    for _ in range(args.repeats):
-        for cyclic in (False, True):
-            t = time.thread_time()
-            out[cyclic] = period_doubled_branch(cfg, "omega", pd, 271.5, 273.0, steps_per_period=600, workers=1,
-                                                max_points=args.points, cyclic=cyclic)
-            times[cyclic].append(time.thread_time() - t)
+
+    def doubled(cyclic):
+        out[cyclic] = period_doubled_branch(cfg, "omega", pd, 271.5, 273.0, steps_per_period=600, workers=1,
+                                            max_points=args.points, cyclic=cyclic)
+
+    times = C.interleaved({False: lambda: doubled(False), True: lambda: doubled(True)}, args.repeats)
     whole, cyc = out[False], out[True]
     same = whole.params.size == cyc.params.size and np.allclose(whole.params, cyc.params, rtol=0, atol=1e-6)
     print(f"tuned 96-blade Coulomb ring, EO 12, S = 600: the period-doubled branch from {pd.param:.6f} rad/s, "

@@ -271,8 +271,6 @@ def settle_start(t, y, cm, I, R, WI, WF, G, counters, max_pivots, log_t, log_c, 
         factor_stick(cm, I, R, WI, WF)  # noqa: F821
         any_fired = True
     if not any_fired:
-        for j in range(nc):
-            fired[j] = 0
         return 0
     if not settle_event(t, y, cm, I, R, WI, WF, G, counters, max_pivots, log_t, log_c, log_g, log_from, log_to,
                         True):

@@ -531,25 +531,33 @@ class ContactTangent:
             The modes before it.
         events : list of ``(contact, guard, from, to)``
         """
-        n = self.n
-        rows = np.arange(n)
         cm = np.asarray(cm, dtype=np.int64)
-        cm2 = cm.copy()
-        ye = np.asarray(y, dtype=float).copy()
-        D = np.eye(n)
-        for j, gi, frm, to in events:
-            if cm2[j] != frm:
+        seen = cm.copy()
+        for j, _, frm, to in events:
+            if seen[j] != frm:
                 raise ContactTangentError(f"the settling's log disagrees with the modes at contact {j}")
-            if gi >= 0:
-                self._factor(cm2)
-                Rj, ye = self._reset_jacobian(0.0, ye, cm2, j, gi, rows)
-                if Rj is not None:
-                    D = Rj @ D
-            cm2[j] = to
-        if any(self._rigid_stick(j, cm2[j]) and not self._rigid_stick(j, cm[j]) for j in range(self.nc)):
-            stick = [j for j in range(self.nc) if self._rigid_stick(j, cm2[j])]
-            D = self._projection_block(stick, rows) @ D
+            seen[j] = to
+        self._factor(cm)
+        D, _, _ = self._through_transitions(np.eye(self.n), 0.0, np.asarray(y, dtype=float).copy(), cm,
+                                            [(j, gi, to) for j, gi, _, to in events], np.arange(self.n),
+                                            range(self.nc))
         return D
+
+    def _through_transitions(self, V, t, y, cm, group, rows, contacts):
+        """``V`` (on ``rows``) taken through the transitions ``group`` at ``(t, y)`` from the modes ``cm``: each
+        ``(contact, guard, to)``'s reset (``guard`` ``-1``: a mode the friction problem set, no reset), then the
+        stick projection of ``contacts`` where one of them starts to stick. Returns ``(V, y, modes)`` after them."""
+        cm2 = cm.copy()
+        for j, gi, to in group:
+            if gi >= 0:
+                Rj, y = self._reset_jacobian(t, y, cm2, j, gi, rows)
+                if Rj is not None:
+                    V = Rj[np.ix_(rows, rows)] @ V
+            cm2[j] = to
+        if any(self._rigid_stick(j, cm2[j]) and not self._rigid_stick(j, cm[j]) for j in contacts):
+            stick = [j for j in contacts if self._rigid_stick(j, cm2[j])]
+            V = self._projection_block(stick, rows) @ V
+        return V, y, cm2
 
     def _cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H):
         """The rows ``rows`` of a step's tangent through the cluster's ``events`` (log indices, in time order);
@@ -578,17 +586,7 @@ class ContactTangent:
                 if rate == 0.0 or not np.isfinite(rate):
                     raise ContactTangentError(f"a grazing event at t = {te:.9g} (its guard has no rate)")
                 dtb = -(gy[rows] @ W) / rate
-            Vc = W + np.outer(Ph, dtb)
-            cm2 = cm.copy()
-            for j, gi, to in group:
-                if gi >= 0:
-                    Rj, ye = self._reset_jacobian(te, ye, cm2, j, gi, rows)
-                    if Rj is not None:
-                        Vc = Rj[np.ix_(rows, rows)] @ Vc
-                cm2[j] = to
-            if any(self._rigid_stick(j, cm2[j]) and not self._rigid_stick(j, cm[j]) for j in in_cluster):
-                stick = [j for j in in_cluster if self._rigid_stick(j, cm2[j])]
-                Vc = self._projection_block(stick, rows) @ Vc
+            Vc, ye, cm2 = self._through_transitions(W + np.outer(Ph, dtb), te, ye, cm, group, rows, in_cluster)
             ta, ya, cm, dta = te, ye, cm2, dtb
         _, Pt, Ph = self._substep_derivatives(ta, ya, t1 - ta, cm, H, rows)
         return self._step_matrix(t1 - ta, cm, ya, rows) @ Vc + np.outer(Pt - Ph, dta)

@@ -408,7 +408,9 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         orbits on the map reduced by their symmetry (:mod:`.cyclic`), over ``T / d`` of
         the period (``d = N / gcd(EO, N)``: 8 on the 24-blade ring at engine order 3),
         with the whole ring's multipliers from its Jacobian. The first orbit (from the
-        transient or the guess) must be a travelling wave. ``periods`` must be 1.
+        transient or the guess) must be a fixed point of the reduced map that comes back
+        after ``periods`` periods (a travelling wave for 1; the doubled orbits of
+        :func:`period_doubled_branch` for 2).
 
     Returns
     -------
@@ -444,10 +446,10 @@ def _cyclic_branch(config, name, start, stop, resume, kwargs) -> Branch:
 
     The reduced map's section sees every contact's switching times modulo ``T / d``, not
     ``T``: ``d`` times as many pass it as the whole map's, and where one does the map has a
-    kink that the per-contact kernel's start (no ``settle``) cannot always be shot across
-    (measured on the tuned 24-blade ring at 292.725 rad/s, events ``1.7e-9 T / 8`` after the
-    section, where the whole map's branch steps over it). Where the whole map stalls too, or
-    the orbit past the stall is no travelling wave, the whole map finishes the branch.
+    kink. Since start states are settled (:func:`~.period_map.settle`) the branch steps over
+    the one that stalled it on the tuned 24-blade ring (292.725 rad/s); the fallback stays
+    for stalls the settling does not remove. Where the whole map stalls too, or the orbit
+    past the stall is no travelling wave, the whole map finishes the branch.
     """
     from .cyclic import CyclicError
     max_points = kwargs["max_points"]
@@ -536,9 +538,15 @@ def _segment(config, name: str, start: float, stop: float, *, periods, guess, mo
                     checkpoint_every=checkpoint_every, before=resume)
 
 
+#: How close (scaled residual) an orbit of the whole map must come back under the reduced map, and after its
+#: periods under the turn, to be taken as the reduced map's fixed point (:func:`_travelling_wave`,
+#: :func:`_reduced_branch_point`).
+WAVE_TOL = 1e-6
+
+
 def _travelling_wave(ctx, X, mode, name, at):
     """The first orbit ``(X, mode)``, found on the whole period's map, solved again on the reduced one (it must be
-    a travelling wave: its residual there within ``1e-6``).
+    a travelling wave: its residual there within :data:`WAVE_TOL`).
 
     Raises
     ------
@@ -548,14 +556,14 @@ def _travelling_wave(ctx, X, mode, name, at):
     from .cyclic import CyclicError
     r, _ = ctx.residual(X, mode)
     off = float(np.max(np.abs(r)))
-    Xc, mc, _ = ctx.correct_at_value(X, mode, jacobian=False) if off <= 1e-6 else (None, mode, None)
+    Xc, mc, _ = ctx.correct_at_value(X, mode, jacobian=False) if off <= WAVE_TOL else (None, mode, None)
     if Xc is None:
         raise CyclicError(f"the first orbit at {name} = {at:g} is no travelling wave: turned by the symmetry it is "
                           f"{off:.3g} (scaled) from itself; start where the ring's orbit is one (another start, "
                           f"guess or transient), or continue without the cyclic reduction")
     sym = ctx.fam.symmetry
     back = sym.comes_back(Xc[:-1] * ctx.scale, ctx.scale)
-    if back > 1e-6:
+    if back > WAVE_TOL:
         raise CyclicError(f"the first orbit at {name} = {at:g} comes back after {sym.periods} period(s) turned by "
                           f"{sym.turn * sym.fraction * sym.periods % sym.blades} blades ({back:.3g} scaled from "
                           f"itself): it is no orbit of that period")
@@ -685,11 +693,7 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
     if cyclic:
         v, whole = _reduced_branch_point(fam, ig, point, y, mode, scale, rel_step, periods)
     if v is None:
-        J1 = old.jacobian(y, _copy(mode), scale, rel_step)
-        mu, V = np.linalg.eig(J1)
-        k = int(np.argmin(np.abs(mu + 1.0)))
-        v = np.real(V[:, k]) / scale
-        v /= np.linalg.norm(v)
+        _, v = _critical_direction(old.jacobian(y, _copy(mode), scale, rel_step), -1.0, scale)
     ctx = _Context(fam, scale, span, tol, rel_step, max_corrections, grazing_tol)
     X0 = np.append(y / scale, point.param / span)
     A0 = ctx.jacobian(X0, mode)
@@ -730,17 +734,24 @@ def _reduced_branch_point(fam, ig, point, y, mode, scale, rel_step, periods) -> 
     sym = CyclicSymmetry(fam.config_at(point.param), ig, periods=2)
     G = PeriodMap(ig, 1, fam.jacobian, fam.workers, symmetry=sym)
     off = float(np.max(np.abs(G(y, _copy(mode))[0] - y) / scale))
-    if off > 1e-6:
+    if off > WAVE_TOL:
         return None, (f"on the whole ring's map: the orbit at the doubling is no travelling wave ({off:.3g} scaled "
                       f"from itself under the reduced map)")
-    lam, W = np.linalg.eig(G.jacobian(y, _copy(mode), scale, rel_step))
-    k = int(np.argmin(np.abs(lam - 1.0)))
-    if abs(lam[k] - 1.0) > BRANCH_POINT_TOL:
+    lam, v = _critical_direction(G.jacobian(y, _copy(mode), scale, rel_step), 1.0, scale)
+    if abs(lam - 1.0) > BRANCH_POINT_TOL:
         return None, (f"on the whole ring's map: the reduced map has no branch point there (its eigenvalue nearest "
-                      f"+1 is {complex(lam[k]):.4g}), so the doubled orbits break the reduction's symmetry")
-    v = np.real(W[:, k]) / scale
+                      f"+1 is {complex(lam):.4g}), so the doubled orbits break the reduction's symmetry")
     fam.reduce_by(sym)
-    return v / np.linalg.norm(v), ""
+    return v, ""
+
+
+def _critical_direction(J, target: float, scale) -> tuple:
+    """The eigenvalue of ``J`` nearest ``target`` and its eigenvector's real part in the scaled states, of unit
+    length: the direction a branch born there leaves along."""
+    lam, W = np.linalg.eig(J)
+    k = int(np.argmin(np.abs(lam - target)))
+    v = np.real(W[:, k]) / scale
+    return lam[k], v / np.linalg.norm(v)
 
 
 def _run(ctx, pts, X, T, m, A, bounds, *, progress, checkpoint, checkpoint_every, before=None, **follow) -> Branch:

@@ -53,7 +53,7 @@ class MapRun:
         signature leaves out which contact an event was at.
     rebuild : callable or None
         For a run of a map reduced by a ring's symmetry, what rebuilds the orbit over the
-        whole period from ``Y`` (:meth:`period_orbit`).
+        symmetry's periods from ``Y`` (:meth:`period_orbit`).
     """
 
     start: np.ndarray
@@ -138,7 +138,8 @@ class PeriodMap:
         reduced one, ``G(y) = S^s Phi(0 -> T / d)(y)``, integrated over a ``d``-th of the
         period (``periods`` must be 1), its Jacobian ``S^s dPhi``; the runs are the reduced
         ones (``t``, ``Y``, ``states``, ``modes``, ``log``), with the end state and modes
-        turned, and :meth:`MapRun.period_orbit` rebuilds the orbit over the whole period.
+        turned, and :meth:`MapRun.period_orbit` rebuilds the orbit over the symmetry's
+        ``periods`` excitation periods.
         ``integrator`` may be the whole period's (the map integrates with a copy over
         ``T / d``) or that copy already (:meth:`~blademodel.orbits.cyclic.CyclicSymmetry.reduced`).
     """
