@@ -107,7 +107,9 @@ def phase_table(om, period: float | None, steps_per_period: int | None) -> tuple
     ``hh = period / (2 steps_per_period)``, ``M = 2 steps_per_period``: the forcing at
     the times of a period's steps and RK4 midpoints, libm's values (at the first
     period's step ends, where ``k hh`` equals the loop's time to the bit, the values
-    ``math.sin`` gave the kernel before the table). Empty (``M = 0``)
+    ``math.sin`` gave the kernel before the table). NumPy evaluates them in one call
+    (its float64 ``sin`` and ``cos`` give libm's values to the bit: the table's tests
+    compare them with ``math.sin``, and a million random arguments agreed). Empty (``M = 0``)
     when some group's frequency is not a whole multiple of ``2 pi / period`` (the
     table would not repeat), without a period, or when it would be longer than
     :data:`MAX_PHASE_TABLE`.
@@ -123,11 +125,13 @@ def phase_table(om, period: float | None, steps_per_period: int | None) -> tuple
         if abs(m - round(m)) > 1e-9 * max(1.0, abs(m)):
             return none
     hh = period / M
-    tab = []
-    for w in om:
-        for k in range(M):
-            tab += [math.sin(w * (k * hh)), math.cos(w * (k * hh))]
-    return [hh, 1.0 / hh, float(M)], tab
+    tab = np.empty((len(om), M, 2))
+    times = np.arange(M) * hh          # k * hh, as the loop forms them
+    for g, w in enumerate(om):
+        phase = w * times
+        np.sin(phase, out=tab[g, :, 0])
+        np.cos(phase, out=tab[g, :, 1])
+    return [hh, 1.0 / hh, float(M)], tab.ravel()
 
 
 def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4", gmax: int = 1,
@@ -139,13 +143,75 @@ def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4", gmax: 
     the kernel, any other enters as its tableau. ``gmax``: the most guards of a
     contact's mode (the generated module's ``GMAX``). ``period``, ``steps_per_period``:
     the step grid the forcing's phase table is for (:func:`phase_table`; without them,
-    none).
+    none). The integer tables and the work arrays' layout depend on the structure only
+    and are built once for it (:func:`_structure`); a parameter change packs ``R``.
+    """
+    s = _structure(tables, n_state, method, gmax)
+    header = s.header.copy()
+    om = tables.forcing[4]
+    fs, fc = tables.forcing[2][s.order], tables.forcing[3][s.order]
+    tableau = np.zeros(0) if method == "rk4" else get_method(method).tableau()
+    tg, tab = phase_table(om, period, steps_per_period)
+    R = _pack(header, [tables.invm, tables.K[2], tables.C[2], fs, fc, om, tables.cgn, tables.cgr, tables.cgap,
+                       tables.ck, tables.p, tables.W, tableau, tables.cc, tables.cn0, tg, tab],
+              [*range(contract.R_INVM, contract.R_RK + 1), contract.R_CC, contract.R_N0, contract.R_TG,
+               contract.R_TAB], np.float64, 0)
+    return np.concatenate([header, s.ints]), R, s.WI.copy(), s.WF.copy()
+
+
+def _pack(header, parts, keys, dtype, start) -> np.ndarray:
+    """``parts`` flattened one after another from offset ``start``, each one's offset written to ``header[key]``."""
+    chunks, pos = [], start
+    for key, part in zip(keys, parts):
+        part = np.ascontiguousarray(part, dtype=dtype).ravel()
+        header[key] = pos
+        chunks.append(part)
+        pos += max(part.size, 1)
+        if part.size == 0:
+            chunks.append(np.zeros(1, dtype=dtype))
+    return np.concatenate(chunks) if chunks else np.zeros(0, dtype=dtype)
+
+
+class _Structure:
+    """What :func:`pack_tables` builds from a model's structure alone: the header's integer and work offsets, the
+    integer tables, the work arrays' initial contents and the forcing entries' order."""
+
+    __slots__ = ("header", "ints", "WI", "WF", "order")
+
+
+#: :class:`_Structure` by the structure's key (:func:`_structure`), a few kept
+_STRUCTURES: dict = {}
+_MOST_STRUCTURES = 64
+
+
+def _structure(tables: NumericTables, n_state: int, method: str, gmax: int) -> _Structure:
+    """The :class:`_Structure` of ``tables``: built once for every distinct structure and shared.
+
+    The key holds every integer input (including which couplings ``W`` has: a value that
+    falls to zero drops a coupling), so tables that differ in values only share one.
     """
     n, nc = tables.n, len(tables.cgap)
+    Kp, Ki, _ = tables.K
+    Cp, Ci, _ = tables.C
+    fi, fg, _, _, om = tables.forcing
+    parts = [np.asarray(a) for a in (Kp, Ki, Cp, Ci, fi, fg, tables.cidx, tables.claw, tables.cso, tables.LP,
+                                     tables.cnk, np.asarray(tables.W) != 0.0)]
+    key = (n, nc, len(om), tables.LP.shape, tables.n_law, method, gmax, n_state,
+           *((a.dtype.str, a.shape, a.tobytes()) for a in parts))
+    found = _STRUCTURES.get(key)
+    if found is None:
+        if len(_STRUCTURES) >= _MOST_STRUCTURES:
+            _STRUCTURES.clear()
+        found = _STRUCTURES[key] = _build_structure(tables, n_state, method, gmax)
+    return found
+
+
+def _build_structure(tables: NumericTables, n_state: int, method: str, gmax: int) -> _Structure:
+    n, nc = tables.n, len(tables.cgap)
     m = max(nc, 1)
-    Kp, Ki, Kv = tables.K
-    Cp, Ci, Cv = tables.C
-    fi, fg, fs, fc, om = tables.forcing
+    Kp, Ki, _ = tables.K
+    Cp, Ci, _ = tables.C
+    fi, fg, _, _, om = tables.forcing
     if len(om) > contract.MAX_GROUPS:
         raise ValueError(f"the model's forces have {len(om)} distinct frequencies; the per-contact kernel takes "
                          f"at most {contract.MAX_GROUPS}")
@@ -153,21 +219,7 @@ def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4", gmax: 
     header[contract.H_N], header[contract.H_NC], header[contract.H_NF] = n, nc, len(fi)
     header[contract.H_NG], header[contract.H_LPW] = len(om), tables.LP.shape[1]
     header[contract.H_NLAW] = tables.n_law
-    rk = get_method(method)
-    header[contract.H_NS] = 0 if method == "rk4" else rk.stages
-    tableau = np.zeros(0) if method == "rk4" else rk.tableau()
-
-    def pack(parts, keys, dtype, start):
-        chunks, pos = [], start
-        for key, part in zip(keys, parts):
-            part = np.ascontiguousarray(part, dtype=dtype).ravel()
-            header[key] = pos
-            chunks.append(part)
-            pos += max(part.size, 1)
-            if part.size == 0:
-                chunks.append(np.zeros(1, dtype=dtype))
-        return np.concatenate(chunks) if chunks else np.zeros(0, dtype=dtype)
-
+    header[contract.H_NS] = 0 if method == "rk4" else get_method(method).stages
     # contacts coupled through W (sharing a moved coordinate), per contact in ascending order (CSR)
     W = np.asarray(tables.W, dtype=float).reshape(nc, nc) if nc else np.zeros((0, 0))
     Wp, Wi = [0], []
@@ -176,7 +228,7 @@ def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4", gmax: 
         Wp.append(len(Wi))
     # locality: forcing entries by coordinate, contacts by coordinate, coordinates coupled by K and C
     order = np.argsort(np.asarray(fi, dtype=np.int64), kind="stable")
-    fi, fg, fs, fc = (np.asarray(a)[order] for a in (fi, fg, fs, fc))
+    fi, fg = (np.asarray(a)[order] for a in (fi, fg))
     Fp = np.searchsorted(fi, np.arange(n + 1)) if len(fi) else np.zeros(n + 1, dtype=np.int64)
     touching: list[list[int]] = [[] for _ in range(n)]
     for j in range(nc):
@@ -191,25 +243,21 @@ def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4", gmax: 
                     coupled[i].add(int(ix[e]))
                     coupled[int(ix[e])].add(i)
     Ap, Ai = _csr_lists([sorted(c) for c in coupled])
-    ints = pack([Kp, Ki, Cp, Ci, fi, fg, tables.cidx, tables.claw, tables.cso, tables.LP, Wp, Wi, tables.cnk,
-                 Fp, Dp, Di, Ap, Ai],
-                [*range(contract.O_KP, contract.O_WI + 1), contract.O_CNK, contract.O_FP, contract.O_DP,
-                 contract.O_DI, contract.O_AP, contract.O_AI], np.int64, contract.H_SIZE)
-    tg, tab = phase_table(om, period, steps_per_period)
-    R = pack([tables.invm, Kv, Cv, fs, fc, om, tables.cgn, tables.cgr, tables.cgap, tables.ck, tables.p, tables.W,
-              tableau, tables.cc, tables.cn0, tg, tab],
-             [*range(contract.R_INVM, contract.R_RK + 1), contract.R_CC, contract.R_N0, contract.R_TG,
-              contract.R_TAB], np.float64, 0)
+    s = _Structure()
+    s.order = order
+    s.ints = _pack(header, [Kp, Ki, Cp, Ci, fi, fg, tables.cidx, tables.claw, tables.cso, tables.LP, Wp, Wi,
+                            tables.cnk, Fp, Dp, Di, Ap, Ai],
+                   [*range(contract.O_KP, contract.O_WI + 1), contract.O_CNK, contract.O_FP, contract.O_DP,
+                    contract.O_DI, contract.O_AP, contract.O_AI], np.int64, contract.H_SIZE)
     sizes = [n] + [m] * 9 + [contract.MAX_GROUPS, contract.MAX_GROUPS, contract.MAX_LAW_STATES, n_state, m * m,
                              m, 1, n, m, 3, m * gmax, m, m]
-    WF = pack([np.zeros(k) for k in sizes],
-              [contract.F_F, contract.F_N, contract.F_ND, contract.F_V, contract.F_FR, contract.F_DL, contract.F_X,
-               contract.F_D, contract.F_NULL, contract.F_B, contract.F_SG, contract.F_CG, contract.F_Z,
-               contract.F_YEV, contract.F_L, contract.F_DR, contract.F_T, contract.F_FD, contract.F_XD,
-               contract.F_ACC, contract.F_GOFF, contract.F_TLAST, contract.F_NOISE],
-              np.float64, 0)
-    WF[header[contract.F_T]] = math.nan   # the time of the forcing's sin and cos in F_SG, F_CG: none yet
-    I = np.concatenate([header, ints])
+    s.WF = _pack(header, [np.zeros(k) for k in sizes],
+                 [contract.F_F, contract.F_N, contract.F_ND, contract.F_V, contract.F_FR, contract.F_DL, contract.F_X,
+                  contract.F_D, contract.F_NULL, contract.F_B, contract.F_SG, contract.F_CG, contract.F_Z,
+                  contract.F_YEV, contract.F_L, contract.F_DR, contract.F_T, contract.F_FD, contract.F_XD,
+                  contract.F_ACC, contract.F_GOFF, contract.F_TLAST, contract.F_NOISE],
+                 np.float64, 0)
+    s.WF[header[contract.F_T]] = math.nan   # the time of the forcing's sin and cos in F_SG, F_CG: none yet
     o_dof = contract.W_HEAD + contract.WC_COUNT * nc
     o_rows = o_dof + contract.WD_COUNT * n
     WI = np.zeros(o_rows + 2 * n_state, dtype=np.int64)
@@ -218,7 +266,9 @@ def pack_tables(tables: NumericTables, n_state: int, method: str = "rk4", gmax: 
     WI[o_rows + n_state:o_rows + 2 * n_state] = np.arange(n_state)
     WI[contract.W_FULL] = 1
     WI[contract.W_NULL] = -1
-    return I, R, WI, WF
+    s.WI = WI
+    s.header = header
+    return s
 
 
 def _csr_lists(rows) -> tuple[np.ndarray, np.ndarray]:
@@ -347,9 +397,9 @@ class ContactIntegrator(Integrator):
         return self._digest
 
     def _flow_digest(self) -> str:
-        I, R = self.I, self.R.copy()
+        I = self.I
+        R = self.R[:int(I[contract.R_TG])].copy()   # the phase table (R_TG, R_TAB) last, left out
         R[int(I[contract.R_OM]):int(I[contract.R_GN])] = 0.0
-        R[int(I[contract.R_TG]):] = 0.0
         p = R[int(I[contract.R_P]):int(I[contract.R_P]) + self.tables.p.size]
         unread = np.ones(p.size, dtype=bool)
         unread[np.unique(self.tables.LP)] = False

@@ -138,21 +138,100 @@ def cached_tables(model: Model) -> dict:
     return tables
 
 
-def _csr(entries, n, values):
-    """CSR arrays of summed ``(row, col, value)`` entries."""
-    acc: dict = {}
-    for (i, j, _), v in zip(entries, values):
-        acc[(i, j)] = acc.get((i, j), 0.0) + v
-    rows = [[] for _ in range(n)]
-    for (i, j), v in sorted(acc.items()):
-        if v != 0.0:
-            rows[i].append((j, v))
-    ptr = np.zeros(n + 1, dtype=np.int64)
-    for i in range(n):
-        ptr[i + 1] = ptr[i] + len(rows[i])
-    col = np.array([j for r in rows for j, _ in r], dtype=np.int64)
-    val = np.array([v for r in rows for _, v in r], dtype=float)
-    return ptr, col, val
+class _Plan:
+    """How a table source's entries are read from its evaluated expressions: built once per source.
+
+    The distinct expressions (a ring repeats a few dozen over hundreds of entries) are
+    compiled into one tuple expression, so a parameter change costs one ``eval``; every
+    table is then gathered from that vector by index arrays made here.
+    """
+
+    def __init__(self, tables: dict):
+        texts = sorted(_expressions(tables))
+        self.code = compile(f"({''.join(t + ',' for t in texts)})", "<tables>", "eval")
+        at = {t: k for k, t in enumerate(texts)}
+
+        def index(items):
+            return np.array([at[t] for t in items], dtype=np.int64)
+
+        self.n = n = len(tables["coordinates"])
+        self.inertia = index(tables["inertia"])
+        self.K = _CsrPattern(tables["stiffness"], n, index)
+        self.C = _CsrPattern(tables["damping"], n, index)
+        forcing, constant = tables["forcing"], tables["constant"]
+        self.fi = np.array([e[0] for e in forcing] + [e[0] for e in constant], dtype=np.int64)
+        self.fa, self.fw, self.fph = (index([e[k] for e in forcing]) for k in (1, 2, 3))
+        self.const = index([e[1] for e in constant])
+        cs = tables["contacts"]
+        nc = len(cs)
+        self.gap, self.k = index([c["gap"] for c in cs]), index([c["k"] for c in cs])
+        self.c, self.N0 = index([c.get("c", "0") for c in cs]), index([c.get("N0", "0") for c in cs])
+        # tables cached before contacts had normal laws hold springs only
+        kinds = {"spring": NK_SPRING, "damped": NK_DAMPED, "load": NK_LOAD}
+        self.cnk = np.array([kinds[c.get("normal", "spring")] for c in cs], dtype=np.int64)
+        self.cidx = -np.ones((nc, 4), dtype=np.int64)
+        self.gn, self.gr = np.zeros((nc, 4), dtype=np.int64), np.zeros((nc, 4), dtype=np.int64)
+        for j, c in enumerate(cs):
+            for k, slot in enumerate(c["slots"]):
+                self.cidx[j, k] = slot
+                self.gn[j, k], self.gr[j, k] = at[c["gn"][k]], at[c["gr"][k]]
+        self.slot = self.cidx >= 0
+        self.slot_contact, self.slot_k = np.nonzero(self.slot)   # contact by contact, slots in order
+        self.law_names = [list(c["law"]) for c in cs]
+        self._law_positions: dict = {}
+
+    def values(self, namespace: dict) -> np.ndarray:
+        """Every distinct expression evaluated in ``namespace``, as :attr:`code` orders them."""
+        return np.array([float(x) for x in eval(self.code, namespace)], dtype=float)
+
+    def law_positions(self, param_order) -> np.ndarray:
+        """``LP``: each contact's law parameters as positions in ``param_order``."""
+        key = tuple(param_order)
+        found = self._law_positions.get(key)
+        if found is None:
+            pos = {name: i for i, name in enumerate(param_order)}
+            found = np.zeros((len(self.law_names), max([len(c) for c in self.law_names] + [1])), dtype=np.int64)
+            for j, names in enumerate(self.law_names):
+                for k, name in enumerate(names):
+                    found[j, k] = pos[name]
+            self._law_positions[key] = found
+        return found
+
+
+class _CsrPattern:
+    """The summed ``(row, col, value)`` entries of a linear table, as CSR arrays once the values are known."""
+
+    def __init__(self, entries, n: int, index):
+        self.n = n
+        keys = np.array([i * n + j for i, j, _ in entries], dtype=np.int64)
+        self.pairs, self.inverse = np.unique(keys, return_inverse=True)   # sorted by row, then column
+        self.value = index([e[2] for e in entries])
+
+    def arrays(self, vals: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(ptr, col, val)``, entries that sum to zero left out."""
+        n = self.n
+        summed = np.bincount(self.inverse, weights=vals[self.value], minlength=self.pairs.size) \
+            if self.pairs.size else np.zeros(0)
+        kept = summed != 0.0
+        rows, col = np.divmod(self.pairs[kept], n) if n else (np.zeros(0, dtype=np.int64),) * 2
+        ptr = np.zeros(n + 1, dtype=np.int64)
+        ptr[1:] = np.cumsum(np.bincount(rows, minlength=n))
+        return ptr, col.astype(np.int64), summed[kept]
+
+
+#: :class:`_Plan` of table sources, by the source's ``id``; each entry holds its source so that the ``id`` is not
+#: reused while the entry lives
+_PLANS: dict = {}
+_MOST_PLANS = 64
+
+
+def _plan_of(tables: dict) -> _Plan:
+    entry = _PLANS.get(id(tables))
+    if entry is None or entry[0] is not tables:
+        if len(_PLANS) >= _MOST_PLANS:
+            _PLANS.clear()
+        entry = _PLANS[id(tables)] = (tables, _Plan(tables))
+    return entry[1]
 
 
 class NumericTables:
@@ -175,60 +254,43 @@ class NumericTables:
     """
 
     def __init__(self, tables: dict, values: dict, law_kind, state_offset, param_order, n_law: int):
-        ns = {**_NAMESPACE, **values}
-        ev = _Evaluator(ns)
-        n = len(tables["coordinates"])
+        plan = _plan_of(tables)
+        vals = plan.values({**_NAMESPACE, **values})
+        n = plan.n
         self.n = n
-        self.invm = np.array([1.0 / ev(e) for e in tables["inertia"]])
-        self.K = _csr(tables["stiffness"], n, [ev(e[2]) for e in tables["stiffness"]])
-        self.C = _csr(tables["damping"], n, [ev(e[2]) for e in tables["damping"]])
+        inertia = vals[plan.inertia]
+        if not np.all(inertia != 0.0):
+            c = tables["coordinates"][int(np.argmin(inertia != 0.0))]
+            raise ValueError(f"coordinate {c}: the inertia is zero")
+        self.invm = 1.0 / inertia
+        self.K = plan.K.arrays(vals)
+        self.C = plan.C.arrays(vals)
+        # a sin(w t + ph) = a cos(ph) sin(w t) + a sin(ph) cos(w t); a constant is the group w = 0, whose
+        # sin(0) = 0 and cos(0) = 1 leave fc
+        a, w, ph = vals[plan.fa], vals[plan.fw], vals[plan.fph]
         groups: list[float] = []
-        fi, fg, fs, fc = [], [], [], []
-        for i, a, w, ph in tables["forcing"]:
-            a, w, ph = ev(a), ev(w), ev(ph)
-            if w not in groups:
-                groups.append(w)
-            fi.append(i)
-            fg.append(groups.index(w))
-            fs.append(a * math.cos(ph))  # a sin(w t + ph) = a cos(ph) sin(w t) + a sin(ph) cos(w t)
-            fc.append(a * math.sin(ph))
-        for i, a in tables["constant"]:   # the group w = 0: fs sin(0) + fc cos(0) = fc
-            if 0.0 not in groups:
-                groups.append(0.0)
-            fi.append(i)
-            fg.append(groups.index(0.0))
-            fs.append(0.0)
-            fc.append(ev(a))
-        self.forcing = (np.array(fi, dtype=np.int64), np.array(fg, dtype=np.int64), np.array(fs, dtype=float),
-                        np.array(fc, dtype=float), np.array(groups, dtype=float))
-        cs = tables["contacts"]
-        nc = len(cs)
-        self.cidx = -np.ones((nc, 4), dtype=np.int64)
-        self.cgn = np.zeros((nc, 4))
-        self.cgr = np.zeros((nc, 4))
-        self.cgap = np.array([ev(c["gap"]) for c in cs], dtype=float)
-        self.ck = np.array([ev(c["k"]) for c in cs], dtype=float)
-        # tables cached before contacts had normal laws hold springs only
-        kinds = {"spring": NK_SPRING, "damped": NK_DAMPED, "load": NK_LOAD}
-        self.cnk = np.array([kinds[c.get("normal", "spring")] for c in cs], dtype=np.int64)
-        self.cc = np.array([ev(c.get("c", "0")) for c in cs], dtype=float)
-        self.cn0 = np.array([ev(c.get("N0", "0")) for c in cs], dtype=float)
-        pos = {name: i for i, name in enumerate(param_order)}
-        width = max([len(c["law"]) for c in cs] + [1])
-        self.LP = np.zeros((nc, width), dtype=np.int64)
-        for j, c in enumerate(cs):
-            for k, s in enumerate(c["slots"]):
-                self.cidx[j, k] = s
-                self.cgn[j, k] = ev(c["gn"][k])
-                self.cgr[j, k] = ev(c["gr"][k])
-            for k, name in enumerate(c["law"]):
-                self.LP[j, k] = pos[name]
+        fg = []
+        for x in [*w.tolist(), *([0.0] * plan.const.size)]:   # groups in order of appearance
+            if x not in groups:
+                groups.append(x)
+            fg.append(groups.index(x))
+        fs = np.concatenate([a * np.cos(ph), np.zeros(plan.const.size)])
+        fc = np.concatenate([a * np.sin(ph), vals[plan.const]])
+        self.forcing = (plan.fi.copy(), np.array(fg, dtype=np.int64), fs, fc, np.array(groups, dtype=float))
+        self.cidx = plan.cidx.copy()
+        self.cgn = np.zeros(plan.cidx.shape)
+        self.cgr = np.zeros(plan.cidx.shape)
+        self.cgn[plan.slot] = vals[plan.gn[plan.slot]]
+        self.cgr[plan.slot] = vals[plan.gr[plan.slot]]
+        self.cgap, self.ck = vals[plan.gap], vals[plan.k]
+        self.cnk = plan.cnk.copy()
+        self.cc, self.cn0 = vals[plan.c], vals[plan.N0]
+        self.LP = plan.law_positions(param_order).copy()
         #: each contact's relative-slip gradient in the coordinates (rows: contacts)
+        nc = plan.cidx.shape[0]
         self.G = np.zeros((nc, n))
-        for j in range(nc):
-            for k in range(4):
-                if self.cidx[j, k] >= 0:
-                    self.G[j, self.cidx[j, k]] += self.cgr[j, k]
+        j, k = plan.slot_contact, plan.slot_k
+        np.add.at(self.G, (j, plan.cidx[j, k]), self.cgr[j, k])
         self.W = (self.G * self.invm) @ self.G.T
         self.claw = np.array(law_kind, dtype=np.int64)
         self.cso = np.array(state_offset, dtype=np.int64)
@@ -252,16 +314,16 @@ def _dense(ptr, col, val, n):
     return out
 
 
-class _Evaluator:
-    """Evaluate expression strings with compiled code objects, memoised."""
-
-    _code: dict = {}
-
-    def __init__(self, namespace: dict):
-        self.ns = namespace
-
-    def __call__(self, text: str) -> float:
-        code = self._code.get(text)
-        if code is None:
-            code = self._code[text] = compile(text, "<table>", "eval")
-        return float(eval(code, self.ns))
+def _expressions(tables: dict) -> set:
+    """The expression strings of a table source (:func:`derive_tables`)."""
+    out = set(tables["inertia"])
+    out.update(e[2] for e in tables["stiffness"])
+    out.update(e[2] for e in tables["damping"])
+    for _, a, w, ph in tables["forcing"]:
+        out.update((a, w, ph))
+    out.update(a for _, a in tables["constant"])
+    for c in tables["contacts"]:
+        out.update((c["gap"], c["k"], c.get("c", "0"), c.get("N0", "0")))
+        out.update(c["gn"])
+        out.update(c["gr"])
+    return out
