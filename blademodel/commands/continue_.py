@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import interrupts
-from ..orbits import ContinuationInterrupted, FlowError, ShootingError, continuation, period_doubled_branch
+from ..orbits import (ContinuationInterrupted, FlowError, ShootingError, branch_point_branch, continuation,
+                      period_doubled_branch)
 from ..orbits.cyclic import CyclicError
 from ..progress import Progress
 from . import jsonout
@@ -50,8 +51,10 @@ def register(subparsers) -> argparse.ArgumentParser:
                         "with --switch, the period-doubled branches (on the reduced map where it has a branch point at "
                         "the doubling, else on the whole ring's map)")
     p.add_argument("--switch", action="store_true",
-                   help="also follow the period-doubled branch born at each period doubling found "
-                        "(saved beside --out as FILE_pd1.nc, ...; drawn on the same --plot)")
+                   help="also follow the period-doubled branch born at each period doubling found, and the branch "
+                        "that crosses this one at each branch point (on identical blades: orbits that break their "
+                        "symmetry, localised; saved beside --out as FILE_pd1.nc, ..., FILE_bp1.nc, ...; drawn on "
+                        "the same --plot)")
     p.add_argument("--quantity", choices=("harmonic", "amplitude", "section"), default="harmonic",
                    help="what --plot draws: first-harmonic amplitude (an FRF, default), half the peak-to-peak "
                         "excursion, or the Poincare samples (a bifurcation diagram)")
@@ -170,7 +173,7 @@ def run(args: argparse.Namespace) -> int:
             print("hint: --transient N (periods from rest before shooting), another --from, or --period 2",
                   file=sys.stderr)
         return 1
-    doubled, doubled_files = [], []
+    doubled, branched, doubled_files = [], [], []
     if args.switch:
         for k, pd in enumerate(branch.points("period-doubling"), 1):
             name = str(Path(args.out).with_name(f"{Path(args.out).stem}_pd{k}.nc")) if args.out else None
@@ -197,6 +200,25 @@ def run(args: argparse.Namespace) -> int:
                 continue
             if name:
                 doubled_files.append(name)
+        for k, bp in enumerate(branch.points("branch-point"), 1):
+            name = str(Path(args.out).with_name(f"{Path(args.out).stem}_bp{k}.nc")) if args.out else None
+
+            def crossing(resume, bp=bp, **kw):
+                if resume is not None:   # an unfinished branch goes on as any branch (on the whole map)
+                    return continuation(config, args.param, args.start, args.stop, periods=args.period,
+                                        resume=resume, **shared, **kw)
+                return branch_point_branch(config, args.param, bp, args.start, args.stop, periods=args.period,
+                                           **shared, **kw)
+            try:
+                branched.append(_continued(name, config, {**run_settings, "branch_point": k},
+                                           f"branch from branch point {k}", args.param, crossing))
+            except (ShootingError, FlowError) as e:
+                print(f"warning: no switch at the branch point {k} ({args.param} = {bp.param:.6g}): {e}",
+                      file=sys.stderr)
+                branched.append(None)
+                continue
+            if name:
+                doubled_files.append(name)
     state = args.state or branch.state_names[0]
     if state not in branch.state_names:
         raise ValueError(f"--state {state!r}: not a state of the model ({', '.join(branch.state_names)})")
@@ -206,7 +228,7 @@ def run(args: argparse.Namespace) -> int:
         if args.overlay:
             overlay = sweep_overlay(args.overlay, args.param, branch.state_names.index(state),
                                     getattr(config, "friction", None))
-        branch_figure([branch, *[b for b in doubled if b is not None]], state,
+        branch_figure([branch, *[b for b in doubled + branched if b is not None]], state,
                       quantity=args.quantity, overlay=overlay).savefig(args.plot, dpi=120)
     i = branch.state_names.index(state)
     rep = {"field": branch.field, "periods": branch.periods, "points": len(branch.params),
@@ -216,12 +238,7 @@ def run(args: argparse.Namespace) -> int:
            "special": [{"kind": p.kind, "value": p.param, "multiplier": [p.multiplier.real, p.multiplier.imag],
                         "bracket": None if p.bracket is None else list(p.bracket)}
                        for p in branch.special], "state": state,
-           "doubled": [None if b is None else {"periods": b.periods, "points": len(b.params), "message": b.message,
-                                               "values": b.params.tolist(),
-                                               "harmonic1": np.abs(b.harmonics[:, i]).tolist(),
-                                               "stable": b.stable.tolist(),
-                                               "special": [{"kind": p.kind, "value": p.param} for p in b.special]}
-                       for b in doubled]}
+           "doubled": [_summary(b, i) for b in doubled], "branched": [_summary(b, i) for b in branched]}
     if args.json:
         print(jsonout.dumps(rep))
         return 0
@@ -237,17 +254,27 @@ def run(args: argparse.Namespace) -> int:
         within = "" if p.bracket is None else f", somewhere in [{p.bracket[0]:.8g}, {p.bracket[1]:.8g}]"
         print(f"  {p.kind} at {args.param} = {p.param:.8g}{within} (multiplier {p.multiplier.real:.6g}"
               f"{p.multiplier.imag:+.6g}i)")
-    for k, b in enumerate(doubled, 1):
-        if b is None:
-            continue
-        print(f"{len(b.params)} period-{b.periods} orbits from the period doubling {k}, {args.param} = "
-              f"{b.params.min():.6g} to {b.params.max():.6g} ({b.message}); {int(np.sum(~b.stable))} unstable")
-        for p in b.special:
-            print(f"  {p.kind} at {args.param} = {p.param:.8g}")
+    for what, switched_to in (("period doubling", doubled), ("branch point", branched)):
+        for k, b in enumerate(switched_to, 1):
+            if b is None:
+                continue
+            print(f"{len(b.params)} period-{b.periods} orbits from the {what} {k}, {args.param} = "
+                  f"{b.params.min():.6g} to {b.params.max():.6g} ({b.message}); {int(np.sum(~b.stable))} unstable")
+            for p in b.special:
+                print(f"  {p.kind} at {args.param} = {p.param:.8g}")
     for what, name in (("saved", args.out), ("saved", ", ".join(doubled_files)), ("plotted", args.plot)):
         if name:
             print(f"{what} {name}")
     return 0
+
+
+def _summary(b, i: int) -> dict | None:
+    """A switched branch for the JSON report (None where the switch failed); ``i``: the state reported."""
+    if b is None:
+        return None
+    return {"periods": b.periods, "points": len(b.params), "message": b.message, "values": b.params.tolist(),
+            "harmonic1": np.abs(b.harmonics[:, i]).tolist(), "stable": b.stable.tolist(),
+            "special": [{"kind": p.kind, "value": p.param} for p in b.special]}
 
 
 def _continued(path, config, run_settings: dict, label: str, param: str, follow):

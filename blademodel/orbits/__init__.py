@@ -10,12 +10,13 @@ the flow (variational equations with saltation matrices at the events,
 :mod:`blademodel.numeric.tangent`) on the product-mode kernel, central differences of
 the map elsewhere (``docs/orbits.md``). :func:`continuation` follows a branch in a
 config field; :func:`period_doubled_branch` switches to the branch born at a period
-doubling.
+doubling, :func:`branch_point_branch` to the one that crosses it at a branch point.
 """
 
-from .arclength import Branch, ContinuationInterrupted, SpecialPoint, continuation, period_doubled_branch
+from .arclength import (Branch, ContinuationInterrupted, SpecialPoint, branch_point_branch, continuation,
+                        period_doubled_branch)
 from .period_map import FlowError, PeriodMap
 from .shooting import PeriodicOrbit, ShootingError, find_periodic_orbit
 
 __all__ = ["Branch", "ContinuationInterrupted", "FlowError", "PeriodMap", "PeriodicOrbit", "ShootingError",
-           "SpecialPoint", "continuation", "find_periodic_orbit", "period_doubled_branch"]
+           "SpecialPoint", "branch_point_branch", "continuation", "find_periodic_orbit", "period_doubled_branch"]

@@ -29,9 +29,10 @@ orbit, the field by the continuation range).
 Each point carries its Floquet multipliers and its orbit's events (their signature: which
 transitions, how often). A change in the number of multipliers outside the unit circle
 between two points is a bifurcation, located by regula falsi on the multiplier nearest the
-unit circle and classified by the multiplier that crossed: through ``+1`` a fold (the
-field's tangent component changes sign there too), through ``-1`` a period doubling, a
-complex pair a Neimark-Sacker bifurcation. A change in the signature is a grazing, each
+unit circle and classified by the multiplier that crossed: through ``+1`` a fold where the
+field's tangent component changes sign there too, a branch point where it does not (another
+branch crosses: :func:`_turns`), through ``-1`` a period doubling, a complex pair a
+Neimark-Sacker bifurcation. A change in the signature is a grazing, each
 one between the two points located by bisection (with the bracket that holds it where the
 bisection cannot close).
 """
@@ -63,7 +64,9 @@ class SpecialPoint:
     Attributes
     ----------
     kind : str
-        ``"fold"``, ``"period-doubling"``, ``"neimark-sacker"`` or ``"grazing"`` (the orbit's
+        ``"fold"`` (a multiplier through ``+1`` where the branch turns back in the field),
+        ``"branch-point"`` (one through ``+1`` where it goes on: another branch crosses it,
+        :func:`branch_point_branch`), ``"period-doubling"``, ``"neimark-sacker"`` or ``"grazing"`` (the orbit's
         events change, which transitions or how many: a guard of the orbit touches zero), or
         ``"gap"``: no orbit was found between the branch point before and this one (``bracket``),
         where the step fell below ``ds_min``; the branch goes on from the first orbit that
@@ -695,27 +698,133 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
     if v is None:
         _, v = _critical_direction(old.jacobian(y, _copy(mode), scale, rel_step), -1.0, scale)
     ctx = _Context(fam, scale, span, tol, rel_step, max_corrections, grazing_tol)
+
+    def new_orbit(X1, m1):   # not the old orbit again
+        y1 = X1[:-1] * scale
+        return np.max(np.abs(old(y1, _copy(m1))[0] - y1) / scale) > 1e3 * tol
+
+    b = _switched(ctx, point, y, mode, v, new_orbit, f"the period-{periods} orbits", (lo, hi), ds=ds,
+                  ds_min=ds_min, ds_max=ds_max, max_points=max_points, locate_tol=locate_tol, progress=progress,
+                  checkpoint=checkpoint, checkpoint_every=checkpoint_every)
+    return replace(b, message=f"{b.message} ({whole})") if whole else b
+
+
+def _switched(ctx, point: SpecialPoint, y, mode, v, is_new, old: str, bounds, *, ds, **follow) -> Branch:
+    """The branch that leaves the bifurcation ``point`` (orbit ``y`` in ``mode``) along the scaled state direction
+    ``v``, followed by :func:`_run`; its first point is the bifurcation.
+
+    The switch is one pseudo-arclength step from the point along ``(v, 0)``, on the
+    hyperplane normal to it, for either sign of ``v`` and then at twice the step, until
+    ``is_new(X, mode)`` says the corrected point is not on the old branch (described by
+    ``old`` in the error).
+    """
+    fam, scale, span = ctx.fam, ctx.scale, ctx.span
     X0 = np.append(y / scale, point.param / span)
     A0 = ctx.jacobian(X0, mode)
     for sign, h in ((1.0, ds), (-1.0, ds), (1.0, 2 * ds), (-1.0, 2 * ds)):
         T0 = np.append(sign * v, 0.0)
         X1, m1, A1 = ctx.correct(X0 + h * T0, T0, _copy(mode))
-        if X1 is None:
-            continue
-        y1 = X1[:-1] * scale
-        r_old = np.max(np.abs(old(y1, _copy(m1))[0] - y1) / scale)
-        if r_old > 1e3 * tol:   # not the old orbit again
+        if X1 is not None and is_new(X1, m1):
             break
     else:
-        raise FlowError(f"the switch at {name} = {point.param:g} came back to the period-{periods} orbits "
-                        f"for both signs of the critical eigenvector")
+        raise FlowError(f"the switch at {fam.name} = {point.param:g} came back to {old} for both signs of the "
+                        f"critical eigenvector")
     T1 = _tangent(A1, X1 - X0)
     pts = [ctx.point(X0, mode, A0), ctx.point(X1, m1, A1)]
-    X, T, A = ctx.rescale(_state_scale(pts[-1]["Y"], _n_coordinates(ig)), X1, T1, A1)
+    X, T, A = ctx.rescale(_state_scale(pts[-1]["Y"], _n_coordinates(fam.map_at(point.param).integrator)),
+                          X1, T1, A1)
     pts[-1]["X"], pts[-1]["A"] = X, A
-    b = _run(ctx, pts, X, T, m1, A, (lo, hi), ds=ds, ds_min=ds_min, ds_max=ds_max, max_points=max_points,
-             locate_tol=locate_tol, progress=progress, checkpoint=checkpoint, checkpoint_every=checkpoint_every)
-    return replace(b, message=f"{b.message} ({whole})") if whole else b
+    return _run(ctx, pts, X, T, m1, A, bounds, ds=ds, **follow)
+
+
+def branch_point_branch(config, name: str, point: SpecialPoint, start: float, stop: float, *,
+                        periods: int = 1, ds: float = 0.01, ds_min: float = 1e-5, ds_max: float = 0.05,
+                        max_points: int = 400, tol: float = 1e-10, max_corrections: int = 8,
+                        rel_step: float = 1e-6, locate_tol: float = 1e-7, grazing_tol: float | None = None,
+                        steps_per_period: int = 1000, event_tol: float = 1e-10, method: str = "rk4",
+                        kernel: str = "auto", jacobian: str = "auto", workers: int | None = None,
+                        progress: Callable[[int, float], None] | None = None,
+                        checkpoint: Callable[[Branch], None] | None = None,
+                        checkpoint_every: float = 30.0) -> Branch:
+    """The other branch of period-``periods`` orbits through a branch point of a branch.
+
+    At a branch point a multiplier passes ``+1`` while the branch goes on: two branches
+    of fixed points of the same map cross there. On a symmetric structure (identical
+    blades, a tuned ring's travelling waves) the branch followed holds the symmetric
+    orbits and the other one orbits that break the symmetry (blades vibrating with
+    different amplitudes: localisation), leaving along the eigenvector ``v`` of the
+    multiplier ``+1``, which the symmetry reverses. The switch is one pseudo-arclength
+    step from the point along ``(v, 0)``, which is normal to the old branch's tangent
+    where that tangent keeps the symmetry (the step does not meet the old branch), for
+    either sign of ``v``; the new point is accepted where shooting at its value of the
+    field from the branch point's orbit finds another orbit (the old branch's). From there
+    the branch is followed as by :func:`continuation`, in whichever direction of the field
+    it goes, until the field leaves ``[start, stop]``. Its first point is the branch point
+    itself. The whole period's map is used (a branch point found on a tuned ring's reduced
+    map leads to orbits that are no travelling waves).
+
+    Parameters
+    ----------
+    config, name
+        As for :func:`continuation`.
+    point : SpecialPoint
+        A ``"branch-point"`` point of a branch of ``periods``-periodic orbits.
+    start, stop : float
+        The range of the field the new branch is followed in (it must contain the point).
+    periods : int
+        Period of the branch (the new one has the same).
+    ds, ds_min, ds_max, max_points, tol, max_corrections, rel_step, locate_tol, grazing_tol : float
+        As for :func:`continuation`; ``ds`` is also the switch's step along ``v``.
+    steps_per_period, event_tol, method, kernel, jacobian, workers, progress, checkpoint, checkpoint_every
+        As for :func:`continuation`.
+
+    Returns
+    -------
+    Branch
+        Resumed, if unfinished, by :func:`continuation` with the same ``periods``, ``start``
+        and ``stop``.
+
+    Raises
+    ------
+    ValueError
+        If ``point`` is not a branch point, or lies outside ``[start, stop]``.
+    FlowError
+        If the switch converges back onto the old branch for both signs of ``v``.
+    ContinuationInterrupted
+        On Ctrl-C, with the branch so far.
+    """
+    if point.kind != "branch-point":
+        raise ValueError(f"point must be a branch point, got a {point.kind!r} point")
+    lo, hi = min(start, stop), max(start, stop)
+    if not lo <= point.param <= hi:
+        raise ValueError(f"the branch point at {name} = {point.param:g} lies outside [{lo:g}, {hi:g}]")
+    _check_grazing_tol(grazing_tol)
+    settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
+    fam = _Family(config, name, periods, settings, point.param, jacobian, bounds=(start, stop), workers=workers)
+    P = fam.map_at(point.param)
+    ig = P.integrator
+    y = np.asarray(point.state, dtype=float)
+    mode = point.mode
+    if mode is None:
+        full = np.zeros(ig.n_state)
+        full[:y.size] = y
+        mode = ig.mode_of(full)
+    scale = _state_scale(_orbit_samples(ig, y, mode, periods)[1], _n_coordinates(ig))
+    _, v = _critical_direction(P.jacobian(y, _copy(mode), scale, rel_step), 1.0, scale)
+    ctx = _Context(fam, scale, hi - lo, tol, rel_step, max_corrections, grazing_tol)
+
+    def off_the_old_branch(X1, m1):
+        from .shooting import ShootingError, _shoot
+        try:
+            y_old, _ = _shoot(fam.map_at(X1[-1] * ctx.span), y.copy(), _copy(mode), scale, tol, max_corrections,
+                              rel_step, [])
+        except (ShootingError, FlowError, np.linalg.LinAlgError, ValueError):
+            return True   # no orbit of the old branch there to come back to
+        return float(np.max(np.abs(X1[:-1] * scale - y_old) / scale)) > 1e3 * tol
+
+    return _switched(ctx, point, y, mode, v, off_the_old_branch, "the branch it crosses", (lo, hi), ds=ds,
+                     ds_min=ds_min, ds_max=ds_max, max_points=max_points, locate_tol=locate_tol, progress=progress,
+                     checkpoint=checkpoint, checkpoint_every=checkpoint_every)
 
 
 #: How close to ``+1`` the reduced map's Jacobian must have an eigenvalue at a period doubling for the doubled
@@ -1196,6 +1305,22 @@ def _other_arm(ctx, pts, X, mode, reach, fractions=(1e-5, 1e-4, 1e-3), displacem
                         accept=lambda X_new: ctx.events != last["events"] and np.linalg.norm(X_new - X) <= reach)
 
 
+def _turns(p, q, T_p=None) -> bool:
+    """Whether the branch turns back in the field between its points ``p`` and ``q``: the field components of
+    their tangents (``T_p``, where known, else from ``p``'s Jacobian) have opposite signs.
+
+    A multiplier through ``+1`` is a **fold** where the branch turns, and a **branch
+    point** where it goes on: another branch crosses it there (a tuned ring's
+    travelling waves meet orbits that break their symmetry, the blades' amplitudes
+    differing), and the map's Jacobian along the branch, ``[A; t]``, is singular without
+    the field's component of ``t`` vanishing.
+    """
+    if T_p is None:
+        T_p = _tangent(p["A"], np.append(np.zeros(p["A"].shape[0]), 1.0))
+    T_q = _tangent(q["A"], T_p)
+    return float(T_p[-1]) * float(T_q[-1]) < 0.0
+
+
 def _chord(p, q) -> float:
     """The distance from ``p`` to ``q``."""
     d = q - p
@@ -1602,8 +1727,8 @@ class _Context:
     def detect(self, a, b, Xa, Ta, mode, index, locate_tol, before=None):
         """The bifurcations between consecutive points ``a`` and ``b``, each located on the arclength.
 
-        A change in the number of multipliers outside the unit circle (fold, period
-        doubling, Neimark-Sacker: :meth:`_locate_crossing`), and a change in the orbit's
+        A change in the number of multipliers outside the unit circle (fold, branch point,
+        period doubling, Neimark-Sacker: :meth:`_locate_crossing`), and a change in the orbit's
         events (which transitions it crosses, counted: its signature,
         :meth:`~.period_map.MapRun.signature`): a guard of the orbit touches zero there (a
         contact that grazes, a slip that comes to rest: **grazing**, including the end of
@@ -1635,8 +1760,10 @@ class _Context:
                 bracket = jump
             elif abs(mu.imag) > 1e-6 * abs(mu):
                 kind = "neimark-sacker"
+            elif mu.real < 0:
+                kind = "period-doubling"
             else:
-                kind = "period-doubling" if mu.real < 0 else "fold"
+                kind = "fold" if _turns(p, q, Ta if p is a else None) else "branch-point"
             found.append(_special(kind, best, index, mu, jump))
         if a["signature"] != b["signature"]:
             # the largest multiplier of the point before: at the grazing the map is not differentiable, and
@@ -1993,7 +2120,8 @@ def _special(kind: str, point: dict, index: int, multiplier=None, bracket=None) 
 
 
 def _off_circle(p: SpecialPoint) -> bool:
-    """A fold, period doubling or Neimark-Sacker point whose critical multiplier is not on the unit circle."""
+    """A fold, branch point, period doubling or Neimark-Sacker point whose critical multiplier is not on the unit
+    circle."""
     return p.kind not in ("grazing", "border-collision", "gap") and abs(abs(p.multiplier) - 1.0) > 0.05
 
 

@@ -122,8 +122,8 @@ def save_branch(branch: Branch, path, config=None, run: dict | None = None) -> N
                                                    for p in branch.special])):
             v = ds.createVariable(name, "f8" if "index" not in name else "i8", ("special",))
             v[:] = np.asarray(data)
-        ds["special_kind"].long_name = ("kind of special point: fold, period-doubling, neimark-sacker, grazing, "
-                                        "nonsmooth-fold, border-collision, gap")
+        ds["special_kind"].long_name = ("kind of special point: fold, branch-point, period-doubling, neimark-sacker, "
+                                        "grazing, nonsmooth-fold, border-collision, gap")
         ds["special_" + branch.field].long_name = f"{branch.field} at the special point"
         ds["special_multiplier_re"].long_name = "real part of the critical multiplier"
         ds["special_multiplier_im"].long_name = "imaginary part of the critical multiplier"

@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 MARKERS = {"fold": ("s", "fold"), "period-doubling": ("D", "period doubling"),
            "neimark-sacker": ("^", "Neimark-Sacker"), "grazing": ("o", "grazing"),
            "nonsmooth-fold": ("P", "nonsmooth fold"), "border-collision": ("X", "border collision"),
-           "gap": ("*", "gap (no orbit found)")}
+           "gap": ("*", "gap (no orbit found)"), "branch-point": ("v", "branch point")}
 
 
 def _between(value, x, y, k):
