@@ -228,8 +228,11 @@ def run(args: argparse.Namespace) -> int:
         if args.overlay:
             overlay = sweep_overlay(args.overlay, args.param, branch.state_names.index(state),
                                     getattr(config, "friction", None))
-        branch_figure([branch, *[b for b in doubled + branched if b is not None]], state,
-                      quantity=args.quantity, overlay=overlay).savefig(args.plot, dpi=120)
+        drawn = [(branch, f"period {branch.periods}")]
+        drawn += [(b, f"doubled at {k}") for k, b in enumerate(doubled, 1) if b is not None]
+        drawn += [(b, f"crossing at branch point {k}") for k, b in enumerate(branched, 1) if b is not None]
+        branch_figure([b for b, _ in drawn], state, quantity=args.quantity, overlay=overlay,
+                      labels=[label for _, label in drawn] if len(drawn) > 1 else None).savefig(args.plot, dpi=120)
     i = branch.state_names.index(state)
     rep = {"field": branch.field, "periods": branch.periods, "points": len(branch.params),
            "message": branch.message, "integrations": branch.integrations, "replays": branch.replays,

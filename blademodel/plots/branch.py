@@ -25,7 +25,8 @@ def _between(value, x, y, k):
 COLOURS = [("C0", "C3"), ("C2", "C1"), ("C4", "C6"), ("C9", "C5")]
 
 
-def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", overlay=None, ax=None) -> Figure:
+def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", overlay=None, ax=None,
+                  labels=None) -> Figure:
     """Forced-response or bifurcation plot of a :class:`~blademodel.orbits.Branch` (or several).
 
     Parameters
@@ -43,6 +44,8 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
         ``(values, amplitudes)`` of a brute-force sweep, drawn as dots.
     ax : matplotlib Axes, optional
         Draw into these axes (of a figure with several panels) instead of a new figure.
+    labels : list of str, optional
+        What each branch is, for the legend (default, with several: its period).
     """
     branches = list(branch) if isinstance(branch, (list, tuple)) else [branch]
     own = ax is None
@@ -51,7 +54,9 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
         ax = fig.add_subplot()
     fig = ax.figure
     marked = set()
-    for b, (c_stable, c_unstable) in zip(branches, COLOURS * len(branches)):
+    if labels is not None and len(labels) != len(branches):
+        raise ValueError(f"labels: one per branch ({len(branches)}), got {len(labels)}")
+    for j, (b, (c_stable, c_unstable)) in enumerate(zip(branches, COLOURS * len(branches))):
         i = b.state_names.index(state)
         if quantity == "section":
             curves = [b.sections[:, k, i] for k in range(b.sections.shape[1])]
@@ -68,7 +73,7 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
                 both = stable[k] and stable[k + 1]
                 ax.plot(x[k:k + 2], yc[k:k + 2], "-" if both else "--", color=c_stable if both else c_unstable,
                         lw=1.6)
-        tag = f"period {b.periods}, " if len(branches) > 1 else ""
+        tag = f"{labels[j]}, " if labels is not None else f"period {b.periods}, " if len(branches) > 1 else ""
         ax.plot([], [], "-", color=c_stable, label=f"{tag}stable")
         ax.plot([], [], "--", color=c_unstable, label=f"{tag}unstable")
         for kind, (marker, label) in MARKERS.items():

@@ -2,7 +2,8 @@
 
 Run from the repository root: ``python docs/tools/orbit_figures.py [--only NAME]``. Writes
 ``docs/figures/frf_pair.png``, ``period_doubling_bilinear.png``, ``nonsmooth_fold_coulomb.png``,
-``frf_bladed_disk.png`` and ``doublings_bladed_disk.png`` and prints what each branch found.
+``frf_bladed_disk.png``, ``doublings_bladed_disk.png`` and ``branch_points_twin_blades.png`` and prints what each
+branch found.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from matplotlib.figure import Figure  # noqa: E402
 
 from blademodel.config import apply_overrides, load_config  # noqa: E402
 from blademodel.zheng2022 import BladePair
-from blademodel.orbits import continuation, period_doubled_branch  # noqa: E402
+from blademodel.orbits import branch_point_branch, continuation, period_doubled_branch  # noqa: E402
 from blademodel.plots.branch import branch_figure  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "figures"
@@ -151,7 +152,45 @@ def doublings_bladed_disk():
     fig.savefig(OUT / "doublings_bladed_disk.png", dpi=110)
 
 
-FIGURES = ("frf_pair", "period_doubling", "nonsmooth_fold", "frf_bladed_disk", "doublings_bladed_disk")
+def branch_points_twin_blades():
+    """Two identical blades on gapped stops (``models/twin_blades_stops.yaml``) in omega from 900 to 2200 rad/s: the
+    branch of orbits with the blades alike and the branches that cross it at its two branch points (docs/orbits.md,
+    *Branch points*), the first harmonic of each blade."""
+    cfg = load_config("models/twin_blades_stops.yaml")
+    t = time.process_time()
+    b = continuation(cfg, "omega", 900.0, 2200.0)
+    _report("twin blades, symmetric", b, t)
+    branches = [b]
+    for k, bp in enumerate(b.points("branch-point"), 1):
+        t = time.process_time()
+        c = branch_point_branch(cfg, "omega", bp, 900.0, 2200.0)
+        _report(f"  crossing branch {k} (from {bp.param:.5f})", c, t)
+        branches.append(c)
+    # the branch from the lower point goes round both halves of the loop (the blades swapped); the one from the
+    # upper point, one half: blade 2 the loud one
+    branches = branches[:2]
+    labels = ["blades alike", f"crossing at {b.points('branch-point')[0].param:.2f}"]
+    fig = Figure(figsize=(10, 4.0))
+    for j, state in enumerate(("x1", "x2")):
+        ax = fig.add_subplot(1, 2, j + 1)
+        branch_figure(branches, state, ax=ax, labels=labels)
+        ax.set_xlim(1200, 1700)
+        ax.set_ylim(8e-6, 2e-3)
+        ax.set_yscale("log")
+        ax.set_title(f"blade {j + 1}", fontsize=9)
+        ax.set_xlabel("ω (rad/s)")
+        if j == 0:
+            ax.get_legend().remove()
+        else:
+            ax.legend(fontsize=6, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    fig.suptitle("two identical blades on gapped stops, driven alike: the blades alike, and the localised orbits "
+                 "that cross that branch at its branch points", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(OUT / "branch_points_twin_blades.png", dpi=110)
+
+
+FIGURES = ("frf_pair", "period_doubling", "nonsmooth_fold", "frf_bladed_disk", "doublings_bladed_disk",
+           "branch_points_twin_blades")
 
 
 def main():
