@@ -14,7 +14,7 @@ import pytest
 
 from blademodel.config import apply_overrides, load_config
 from blademodel.numeric.kernels import make_integrator
-from blademodel.orbits import FlowError, PeriodMap, branch_point_branch, continuation
+from blademodel.orbits import PeriodMap, branch_point_branch, continuation
 
 YAML = Path(__file__).resolve().parent.parent / "models" / "twin_blades_stops.yaml"
 MIRROR = [1, 0, 3, 2]   # the state (x1, x2, vx1, vx2) with the blades swapped
@@ -130,3 +130,54 @@ def test_continue_switches_at_branch_points(tmp_path, capsys):
         assert crossing.params[0] == at == rep["branched"][k]["values"][0]
         asym = np.max(np.abs(crossing.states - crossing.states[:, MIRROR]) / _scale(crossing.states), axis=1)
         assert asym[0] < 1e-9 and asym.max() > 0.5   # (it comes back to the symmetric orbits at the other one)
+
+
+@pytest.mark.slow
+def test_a_tuned_ring_s_travelling_wave_gives_way_between_two_branch_points():
+    """The tuned 24-blade Coulomb ring (``models/bladed_disk_24.yaml``) driven twice as hard (``F0 = 120`` N), on
+    the cyclic reduction from 315 to 330 rad/s: a multiplier of the whole ring passes ``+1`` at about 319.69 and
+    324.98 rad/s while the reduced branch goes on through (no fold): two branch points, the travelling wave
+    unstable between them. The switch at the first follows orbits that are no travelling waves (turned by one
+    blade and shifted by ``T / 8`` they differ from themselves) but keep the turn by two blades and ``T / 4``;
+    an integration from rest at such an orbit's value of omega settles on it, its blades' first harmonics (sorted)
+    equal to the orbit's, where the wave is unstable: the ring's steady state there."""
+    cfg = apply_overrides(load_config(YAML.parent / "bladed_disk_24.yaml"), {"F0": "120"})
+    b = continuation(cfg, "omega", 315.0, 330.0, workers=1, cyclic=True)
+    bps = b.points("branch-point")
+    assert len(bps) == 2 and not b.points("fold") and 319 < bps[0].param < 320.5 and 324.5 < bps[1].param < 325.5
+    for q in bps:
+        assert np.all(np.diff(b.params[q.index - 2:q.index + 4]) > 0)   # the reduced branch goes on
+    inside = (b.params > bps[0].param) & (b.params < bps[1].param)
+    assert not np.any(b.stable[inside])
+    nb = branch_point_branch(cfg, "omega", bps[0], 315.0, 330.0, workers=1, max_points=12)
+    j = int(np.nonzero(nb.stable)[0][-1])
+    w, y = nb.params[j], nb.states[j]
+    assert bps[0].param < w < bps[1].param
+    ig = make_integrator(apply_overrides(cfg, {"omega": str(w)}).build())
+    from blademodel.orbits.cyclic import CyclicSymmetry
+    sym = CyclicSymmetry(cfg, ig)
+    S, d = ig.steps_per_period, sym.fraction
+    z = np.zeros(ig.n_state)
+    z[:y.size] = y
+    rec = ig.record_buffer(S + 1)
+    ig.advance(z, ig.mode_of(z), 0, 1, n_transient=0, record=rec)
+    Y = rec[1][:, :sym.n]
+    scale = np.max(np.abs(Y), axis=0)
+
+    def turned(k):   # the orbit at k T / d, turned back by k s blades: equal to its start where it has that symmetry
+        yk = Y[k * S // d]
+        for _ in range(k):
+            yk = sym.turned(yk)
+        return float(np.max(np.abs(yk - Y[0]) / scale))
+    assert turned(1) > 1e-2 and turned(2) < 1e-9
+    xs = [i for i, name in enumerate(nb.state_names) if name.startswith("x")]
+    orbit = np.sort(np.abs(nb.harmonics[j, xs]))
+    assert orbit[-1] - orbit[0] > 1e-4 * orbit[-1]          # the blades' amplitudes differ
+    z = np.zeros(ig.n_state)
+    status, mode, _ = ig.advance(z, ig.mode_of(z), 0, 300)
+    assert status == 0
+    rec = ig.record_buffer(S + 1)
+    ig.advance(z, mode, 0, 1, n_transient=0, record=rec)
+    X = rec[1][:-1][:, xs]
+    settled = np.sort(np.abs(2 * np.fft.rfft(X, axis=0)[1] / X.shape[0]))
+    assert np.max(np.abs(settled - orbit)) < 1e-9 * orbit[-1]
