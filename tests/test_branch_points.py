@@ -138,7 +138,8 @@ def test_a_tuned_ring_s_travelling_wave_gives_way_between_two_branch_points():
     the cyclic reduction from 315 to 330 rad/s: a multiplier of the whole ring passes ``+1`` at about 319.69 and
     324.98 rad/s while the reduced branch goes on through (no fold): two branch points, the travelling wave
     unstable between them. The switch at the first follows orbits that are no travelling waves (turned by one
-    blade and shifted by ``T / 8`` they differ from themselves) but keep the turn by two blades and ``T / 4``;
+    blade and shifted by ``T / 8`` they differ from themselves) but keep the turn by two blades and ``T / 4``, and
+    the switch with ``cyclic`` follows them on the map over ``T / 4`` that keeps that turn, to the same orbits;
     an integration from rest at such an orbit's value of omega settles on it, its blades' first harmonics (sorted)
     equal to the orbit's, where the wave is unstable: the ring's steady state there."""
     cfg = apply_overrides(load_config(YAML.parent / "bladed_disk_24.yaml"), {"F0": "120"})
@@ -150,6 +151,12 @@ def test_a_tuned_ring_s_travelling_wave_gives_way_between_two_branch_points():
     inside = (b.params > bps[0].param) & (b.params < bps[1].param)
     assert not np.any(b.stable[inside])
     nb = branch_point_branch(cfg, "omega", bps[0], 315.0, 330.0, workers=1, max_points=12)
+    # on the map over T / 4 turned by two blades (the reduced map period-doubles at the branch point): the same orbits
+    reduced = branch_point_branch(cfg, "omega", bps[0], 315.0, 330.0, workers=1, max_points=12, cyclic=True)
+    assert "whole ring" not in reduced.message and "whole ring" not in nb.message
+    np.testing.assert_allclose(reduced.params, nb.params, rtol=0, atol=1e-5)
+    np.testing.assert_allclose(reduced.harmonics, nb.harmonics, rtol=0, atol=1e-6 * np.abs(nb.harmonics).max())
+    assert reduced.integrations < nb.integrations
     j = int(np.nonzero(nb.stable)[0][-1])
     w, y = nb.params[j], nb.states[j]
     assert bps[0].param < w < bps[1].param

@@ -64,6 +64,21 @@ def test_the_reduced_map_gives_the_ring_s_orbit_its_run_over_the_period_and_its_
     np.testing.assert_allclose(r2.period_orbit(), whole2.last_run.Y, rtol=0,
                                atol=1e-10 * np.max(np.abs(rw.Y)))
     assert np.linalg.norm(sym2.monodromy(J) - M2) <= 1e-7 * np.linalg.norm(M2)
+    # the same wave on the map that keeps every k-th turn (G^k over k T / d, turned by k s blades): a fixed point
+    # there too, its run the whole period's, its Jacobian J^k (the chain rule at a fixed point of G), and the
+    # whole ring's monodromy from it
+    k = 2 if fraction % 2 == 0 else 3
+    sym_k = CyclicSymmetry(cfg, ig, every=k)
+    assert (sym_k.fraction, sym_k.turn) == (fraction // k, (k * turn) % blades)
+    Gk = PeriodMap(ig, 1, symmetry=sym_k)
+    zk, czk = Gk(y, cm.copy())
+    assert np.max(np.abs(zk - y)) <= 1e-10 * size and np.array_equal(czk, cm)
+    np.testing.assert_allclose(Gk.run(y, cm.copy()).period_orbit(), rw.Y, rtol=0, atol=1e-10 * np.max(np.abs(rw.Y)))
+    Jk = Gk.derivatives(y, cm.copy()).monodromy
+    assert np.linalg.norm(Jk - np.linalg.matrix_power(J, k)) <= 1e-7 * np.linalg.norm(Jk)
+    assert np.linalg.norm(sym_k.monodromy(Jk) - M) <= 1e-7 * np.linalg.norm(M)
+    with pytest.raises(CyclicError, match=f"dividing N / gcd\\(EO, N\\) = {fraction}"):
+        CyclicSymmetry(cfg, ig, every=fraction + 1)
 
 
 def test_a_continuation_on_the_reduced_map_has_the_whole_map_s_orbits_and_bifurcations():

@@ -49,7 +49,8 @@ def register(subparsers) -> argparse.ArgumentParser:
                         "the map over T / d reduced by their symmetry (d = N / gcd(EO, N); 8 times fewer steps on "
                         "24 blades at engine order 3), the whole ring's multipliers from it (docs/orbits.md); "
                         "with --switch, the period-doubled branches (on the reduced map where it has a branch point at "
-                        "the doubling, else on the whole ring's map)")
+                        "the doubling, else on the whole ring's map) and the branches crossing at branch points (on the "
+                        "map over 2 T / d where the reduced map period-doubles there, else on the whole ring's map)")
     p.add_argument("--switch", action="store_true",
                    help="also follow the period-doubled branch born at each period doubling found, and the branch "
                         "that crosses this one at each branch point (on identical blades: orbits that break their "
@@ -204,11 +205,11 @@ def run(args: argparse.Namespace) -> int:
             name = str(Path(args.out).with_name(f"{Path(args.out).stem}_bp{k}.nc")) if args.out else None
 
             def crossing(resume, bp=bp, **kw):
-                if resume is not None:   # an unfinished branch goes on as any branch (on the whole map)
+                if resume is not None:   # an unfinished crossing branch goes on as any branch, on the whole map
                     return continuation(config, args.param, args.start, args.stop, periods=args.period,
                                         resume=resume, **shared, **kw)
                 return branch_point_branch(config, args.param, bp, args.start, args.stop, periods=args.period,
-                                           **shared, **kw)
+                                           cyclic=args.cyclic, **shared, **kw)
             try:
                 branched.append(_continued(name, config, {**run_settings, "branch_point": k},
                                            f"branch from branch point {k}", args.param, crossing))

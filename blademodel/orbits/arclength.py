@@ -745,7 +745,7 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
                         kernel: str = "auto", jacobian: str = "auto", workers: int | None = None,
                         progress: Callable[[int, float], None] | None = None,
                         checkpoint: Callable[[Branch], None] | None = None,
-                        checkpoint_every: float = 30.0) -> Branch:
+                        checkpoint_every: float = 30.0, cyclic: bool = False) -> Branch:
     """The other branch of period-``periods`` orbits through a branch point of a branch.
 
     At a branch point a multiplier passes ``+1`` while the branch goes on: two branches
@@ -761,7 +761,16 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
     the branch is followed as by :func:`continuation`, in whichever direction of the field
     it goes, until the field leaves ``[start, stop]``. Its first point is the branch point
     itself. The whole period's map is used (a branch point found on a tuned ring's reduced
-    map leads to orbits that are no travelling waves).
+    map leads to orbits that are no travelling waves), except with ``cyclic``, below.
+
+    On a tuned ring (the point from a branch of travelling waves) with ``cyclic``, the
+    branch point is looked at on the reduced map ``G`` (:mod:`.cyclic`): where ``G``'s
+    Jacobian ``J`` has the eigenvalue ``-1`` there (``M = S^(-s d) J^d`` shows it as
+    ``+1``), ``G`` period-doubles, and the crossing orbits are fixed points of ``G^2``,
+    the map over ``2 T / d`` turned by ``2 s`` blades (``CyclicSymmetry(every=2)``): the
+    switch steps along that eigenvector, and the branch is followed there, with ``d / 2``
+    times fewer steps a period than on the whole ring's map. Otherwise the whole ring's
+    map is used, and the branch's message says why.
 
     Parameters
     ----------
@@ -777,12 +786,15 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
         As for :func:`continuation`; ``ds`` is also the switch's step along ``v``.
     steps_per_period, event_tol, method, kernel, jacobian, workers, progress, checkpoint, checkpoint_every
         As for :func:`continuation`.
+    cyclic : bool
+        Follow the crossing branch on ``G^2`` where it can be (above); ``periods`` must then
+        be 1.
 
     Returns
     -------
     Branch
         Resumed, if unfinished, by :func:`continuation` with the same ``periods``, ``start``
-        and ``stop``.
+        and ``stop`` (on the whole map).
 
     Raises
     ------
@@ -810,7 +822,11 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
         full[:y.size] = y
         mode = ig.mode_of(full)
     scale = _state_scale(_orbit_samples(ig, y, mode, periods)[1], _n_coordinates(ig))
-    _, v = _critical_direction(P.jacobian(y, _copy(mode), scale, rel_step), 1.0, scale)
+    v, whole = None, ""
+    if cyclic:
+        v, whole = _reduced_crossing(fam, ig, point, y, mode, scale, rel_step, periods)
+    if v is None:
+        _, v = _critical_direction(P.jacobian(y, _copy(mode), scale, rel_step), 1.0, scale)
     ctx = _Context(fam, scale, hi - lo, tol, rel_step, max_corrections, grazing_tol)
 
     def off_the_old_branch(X1, m1):
@@ -822,9 +838,33 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
             return True   # no orbit of the old branch there to come back to
         return float(np.max(np.abs(X1[:-1] * scale - y_old) / scale)) > 1e3 * tol
 
-    return _switched(ctx, point, y, mode, v, off_the_old_branch, "the branch it crosses", (lo, hi), ds=ds,
-                     ds_min=ds_min, ds_max=ds_max, max_points=max_points, locate_tol=locate_tol, progress=progress,
-                     checkpoint=checkpoint, checkpoint_every=checkpoint_every)
+    b = _switched(ctx, point, y, mode, v, off_the_old_branch, "the branch it crosses", (lo, hi), ds=ds,
+                  ds_min=ds_min, ds_max=ds_max, max_points=max_points, locate_tol=locate_tol, progress=progress,
+                  checkpoint=checkpoint, checkpoint_every=checkpoint_every)
+    return replace(b, message=f"{b.message} ({whole})") if whole else b
+
+
+def _reduced_crossing(fam, ig, point, y, mode, scale, rel_step, periods) -> tuple:
+    """For :func:`branch_point_branch` with ``cyclic``: the direction (scaled, unit) along which the crossing
+    branch leaves the branch point on ``G^2``, ``fam`` reduced by that symmetry from then on; or ``(None, why)``
+    where the whole map must take it (``fam`` left as it is)."""
+    from .cyclic import CyclicError, CyclicSymmetry
+    if periods != 1:
+        raise CyclicError(f"the cyclic reduction follows the branch points of period-1 orbits, not of periods = "
+                          f"{periods}")
+    sym = CyclicSymmetry(fam.config_at(point.param), ig)
+    G = PeriodMap(ig, 1, fam.jacobian, fam.workers, symmetry=sym)
+    off = float(np.max(np.abs(G(y, _copy(mode))[0] - y) / scale))
+    if off > WAVE_TOL:
+        return None, (f"on the whole ring's map: the orbit at the branch point is no travelling wave ({off:.3g} "
+                      f"scaled from itself under the reduced map)")
+    lam, v = _critical_direction(G.jacobian(y, _copy(mode), scale, rel_step), -1.0, scale)
+    if abs(lam + 1.0) > BRANCH_POINT_TOL or sym.fraction % 2:
+        return None, (f"on the whole ring's map: the reduced map does not period-double there (its eigenvalue "
+                      f"nearest -1 is {complex(lam):.4g}, over T / {sym.fraction}), so the crossing orbits keep no "
+                      f"turn of the ring")
+    fam.reduce_by(CyclicSymmetry(fam.config_at(point.param), ig, every=2))
+    return v, ""
 
 
 #: How close to ``+1`` the reduced map's Jacobian must have an eigenvalue at a period doubling for the doubled

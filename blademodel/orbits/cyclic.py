@@ -61,6 +61,14 @@ class CyclicSymmetry:
         the eigenvalue ``+1`` on a perturbation that ``S^(s d)`` reverses) have
         ``S^(2 s d) y = y`` and period ``2 T`` (:meth:`comes_back`). The orbit's run and
         monodromy are over ``periods`` excitation periods.
+    every : int
+        Keep only every ``every``-th power of the turn: the turn by ``every s`` blades with
+        the shift ``every tau``, whose map ``G^every`` covers ``every T / d``
+        (``d / every`` times fewer steps than the period map; ``every`` must divide ``d``).
+        Its fixed points are the orbits with that symmetry, the travelling waves among them:
+        the orbits born where ``J`` has the eigenvalue ``-1`` (``G`` period-doubles, the
+        whole ring's ``M`` shows ``+1``: a branch point of the travelling waves) have it for
+        ``every = 2`` (:func:`~blademodel.orbits.branch_point_branch`).
 
     Raises
     ------
@@ -69,14 +77,20 @@ class CyclicSymmetry:
         divide into the reduced map's.
     """
 
-    def __init__(self, config, integrator, periods: int = 1):
+    def __init__(self, config, integrator, periods: int = 1, every: int = 1):
         if int(periods) < 1:
             raise ValueError(f"periods must be a whole number >= 1, got {periods!r}")
         self.periods = int(periods)
         N, EO, g = reducible(config)
         self.blades = N
-        self.fraction = N // g                                   # d: the reduced map covers T / d
-        self.turn = next(s for s in range(1, N) if (s * EO) % N == g)   # s
+        d = N // g
+        if int(every) < 1 or d % int(every):
+            raise CyclicError(f"every = {every!r}: the map keeps every k-th power of the turn for k dividing "
+                              f"N / gcd(EO, N) = {d}")
+        self.every = int(every)
+        self.fraction = d // self.every                          # the reduced map covers T / fraction
+        s = next(s for s in range(1, N) if (s * EO) % N == g)
+        self.turn = (self.every * s) % N                         # the turn it is taken with
         S = int(integrator.steps_per_period)
         if S % self.fraction:
             raise CyclicError(f"steps_per_period = {S} is not a multiple of {self.fraction}: the reduced map "
@@ -95,11 +109,12 @@ class CyclicSymmetry:
         """``integrator`` over ``tau = T / d`` in ``S / d`` steps (the same step): the reduced map's. A copy (its
         :attr:`~blademodel.numeric.contact_kernel.ContactIntegrator.period_fraction` ``d``, so that its copies with
         other parameter values stay reduced), or ``integrator`` itself where it is one already."""
-        if getattr(integrator, "period_fraction", 1) == self.fraction:
+        f = getattr(integrator, "period_fraction", 1)   # (another reduction's integrator: from its whole period)
+        if f == self.fraction:
             return integrator
         new = copy.copy(integrator)
-        new.period = integrator.period / self.fraction
-        new.steps_per_period = integrator.steps_per_period // self.fraction
+        new.period = integrator.period * f / self.fraction
+        new.steps_per_period = integrator.steps_per_period * f // self.fraction
         new.period_fraction = self.fraction
         new._pack()   # its tables (the forcing's phase table is for a whole period: none over a fraction)
         return new
