@@ -2,8 +2,8 @@
 
 Run from the repository root: ``python docs/tools/orbit_figures.py [--only NAME]``. Writes
 ``docs/figures/frf_pair.png``, ``period_doubling_bilinear.png``, ``nonsmooth_fold_coulomb.png``,
-``frf_bladed_disk.png``, ``doublings_bladed_disk.png`` and ``branch_points_twin_blades.png`` and prints what each
-branch found.
+``frf_bladed_disk.png``, ``doublings_bladed_disk.png``, ``branch_points_twin_blades.png`` and
+``branch_points_ring.png`` and prints what each branch found.
 """
 
 from __future__ import annotations
@@ -189,8 +189,62 @@ def branch_points_twin_blades():
     fig.savefig(OUT / "branch_points_twin_blades.png", dpi=110)
 
 
+def branch_points_ring():
+    """The tuned 24-blade Coulomb ring driven twice as hard (F0 = 120 N) on the cyclic reduction from 315 to 330
+    rad/s, the branch crossing its travelling waves at their first branch point (on the map over T / 4), and
+    integrations from rest (docs/orbits.md, *Branch points*): the spread of the blades' first harmonics."""
+    from blademodel.numeric.kernels import make_integrator
+    cfg = apply_overrides(load_config("models/bladed_disk_24.yaml"), {"F0": "120"})
+    t = time.process_time()
+    b = continuation(cfg, "omega", 315.0, 330.0, cyclic=True)
+    _report("24-blade ring, F0 = 120 N, cyclic", b, t)
+    bp = b.points("branch-point")[0]
+    t = time.process_time()
+    c = branch_point_branch(cfg, "omega", bp, 315.0, 330.0, cyclic=True, ds_max=0.01)
+    _report(f"  crossing branch (from {bp.param:.5f})", c, t)
+    xs = [i for i, name in enumerate(c.state_names) if name.startswith("x")]
+
+    def spread(h, columns=xs):
+        a = np.abs(h[..., columns])
+        return (a.max(axis=-1) - a.min(axis=-1)) * 1e6
+
+    rest = []
+    for w in np.linspace(316.0, 328.0, 13):
+        ig = make_integrator(apply_overrides(cfg, {"omega": str(w)}).build())
+        z = np.zeros(ig.n_state)
+        _, mode, _ = ig.advance(z, ig.mode_of(z), 0, 400)
+        rec = ig.record_buffer(ig.steps_per_period + 1)
+        ig.advance(z, mode, 0, 1, n_transient=0, record=rec)
+        X = rec[1][:-1][:, xs]
+        rest.append((w, spread(2 * np.fft.rfft(X, axis=0)[1] / X.shape[0], slice(None))))
+    fig = Figure(figsize=(10, 3.8))
+    ax = fig.add_subplot(1, 2, 1)
+    branch_figure([b, c], "x1", ax=ax, labels=["travelling waves", "crossing"])
+    ax.set_title("blade 1", fontsize=9)
+    ax.set_xlabel("ω (rad/s)")
+    ax.legend(fontsize=6)
+    ax = fig.add_subplot(1, 2, 2)
+    for k in range(len(c.params) - 1):
+        both = c.stable[k] and c.stable[k + 1]
+        ax.plot(c.params[k:k + 2], spread(c.harmonics[k:k + 2]), "-" if both else "--", color="C2" if both else "C1")
+    ax.plot(b.params, spread(b.harmonics), "-", color="C0", lw=1, label="travelling waves (all blades alike)")
+    ax.plot(*zip(*rest), "o", color="k", mfc="none", ms=5, label="integration from rest, 400 periods")
+    ax.plot([], [], "-", color="C2", label="crossing, stable")
+    ax.plot([], [], "--", color="C1", label="crossing, unstable")
+    ax.set_xlabel("ω (rad/s)")
+    ax.set_ylabel("spread of the blades' first harmonics of x (µm)")
+    ax.set_title("how much the blades differ", fontsize=9)
+    ax.legend(fontsize=6)
+    ax.grid(alpha=0.3)
+    fig.suptitle("tuned 24-blade ring, Coulomb, EO 3, F0 = 120 N: between its branch points the ring settles on "
+                 "orbits whose blades differ", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(OUT / "branch_points_ring.png", dpi=110)
+    print("  from rest:", [(round(w, 1), round(float(v), 4)) for w, v in rest])
+
+
 FIGURES = ("frf_pair", "period_doubling", "nonsmooth_fold", "frf_bladed_disk", "doublings_bladed_disk",
-           "branch_points_twin_blades")
+           "branch_points_twin_blades", "branch_points_ring")
 
 
 def main():
