@@ -143,7 +143,8 @@ def doublings_bladed_disk():
         branches.append(d)
     fig = Figure(figsize=(10, 4.4))
     ax = fig.add_subplot()
-    branch_figure(branches, "x1", quantity="section", ax=ax)
+    labels = ["period-1 waves"] + [f"doubled at {pd.param:.2f}" for pd in b.points("period-doubling")]
+    branch_figure(branches, "x1", quantity="section", ax=ax, labels=labels)
     ax.set_title("96-blade ring, Coulomb, EO 12, on T / 8: the period-1 waves and the branches doubled at "
                  + ", ".join(f"{pd.param:.2f}" for pd in b.points("period-doubling")) + " rad/s", fontsize=9)
     ax.set_xlabel("ω (rad/s)")
