@@ -139,7 +139,8 @@ def test_a_tuned_ring_s_travelling_wave_gives_way_between_two_branch_points():
     324.98 rad/s while the reduced branch goes on through (no fold): two branch points, the travelling wave
     unstable between them. The switch at the first follows orbits that are no travelling waves (turned by one
     blade and shifted by ``T / 8`` they differ from themselves) but keep the turn by two blades and ``T / 4``, and
-    the switch with ``cyclic`` follows them on the map over ``T / 4`` that keeps that turn, to the same orbits;
+    the switch with ``cyclic`` follows them on the map over ``T / 4`` that keeps that turn, to the same orbits,
+    and ends where they come back to the travelling waves, at the other branch point;
     an integration from rest at such an orbit's value of omega settles on it, its blades' first harmonics (sorted)
     equal to the orbit's, where the wave is unstable: the ring's steady state there."""
     cfg = apply_overrides(load_config(YAML.parent / "bladed_disk_24.yaml"), {"F0": "120"})
@@ -157,6 +158,10 @@ def test_a_tuned_ring_s_travelling_wave_gives_way_between_two_branch_points():
     np.testing.assert_allclose(reduced.params, nb.params, rtol=0, atol=1e-5)
     np.testing.assert_allclose(reduced.harmonics, nb.harmonics, rtol=0, atol=1e-6 * np.abs(nb.harmonics).max())
     assert reduced.integrations < nb.integrations
+    # followed on, the crossing branch ends where it passes the travelling waves again: at the other branch point
+    on = branch_point_branch(cfg, "omega", bps[0], 315.0, 330.0, workers=1, cyclic=True)
+    assert on.message.startswith("came back to the travelling waves near omega = ")
+    assert abs(float(on.message.split("= ")[1].split(",")[0]) - bps[1].param) < 0.05 and on.params.size < 40
     j = int(np.nonzero(nb.stable)[0][-1])
     w, y = nb.params[j], nb.states[j]
     assert bps[0].param < w < bps[1].param

@@ -838,10 +838,44 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
             return True   # no orbit of the old branch there to come back to
         return float(np.max(np.abs(X1[:-1] * scale - y_old) / scale)) > 1e3 * tol
 
+    waves = None
+    if fam.symmetry is not None:   # followed on G^2: it ends where it comes back to the travelling waves
+        from .cyclic import CyclicSymmetry
+        waves = _back_to_the_waves(CyclicSymmetry(fam.config_at(point.param), ig), name)
     b = _switched(ctx, point, y, mode, v, off_the_old_branch, "the branch it crosses", (lo, hi), ds=ds,
                   ds_min=ds_min, ds_max=ds_max, max_points=max_points, locate_tol=locate_tol, progress=progress,
-                  checkpoint=checkpoint, checkpoint_every=checkpoint_every)
+                  checkpoint=checkpoint, checkpoint_every=checkpoint_every, stop=waves)
     return replace(b, message=f"{b.message} ({whole})") if whole else b
+
+
+def _back_to_the_waves(sym, name: str):
+    """For a crossing branch followed on ``G^2``: ``stop(pts)`` for :func:`_follow`, which ends it where it passes
+    the travelling waves again.
+
+    How an orbit breaks the travelling-wave symmetry is ``y - G(y)``, ``G(y) = S^s Phi(0
+    -> tau)(y)`` read off its rebuilt period (no integration). Projected on its value at
+    the branch's first point past the switch, it falls to zero where the crossing branch
+    meets the travelling waves at another branch point, and changes sign past it, where
+    the branch goes on as its own image under ``G`` (the blades' roles moved): there it ends.
+    """
+    def broken(q):
+        Y = q["Y"]
+        return q["state"][:sym.n] - sym.turned(Y[(Y.shape[0] - 1) // (sym.fraction * sym.periods)])
+
+    first = []
+
+    def stop(pts):
+        if len(pts) < 3:
+            return None
+        if not first:
+            first.append(broken(pts[1]))
+        e0, e1 = (float(np.dot(broken(q), first[0])) for q in pts[-2:])
+        if not (e0 > 0.0 >= e1):
+            return None
+        at = pts[-2]["param"] + e0 / (e0 - e1) * (pts[-1]["param"] - pts[-2]["param"])
+        return (f"came back to the travelling waves near {name} = {at:.6g}, where they have another branch point "
+                f"(past it the crossing branch goes on as its own image under the ring's turn)")
+    return stop
 
 
 def _reduced_crossing(fam, ig, point, y, mode, scale, rel_step, periods) -> tuple:
@@ -985,14 +1019,15 @@ def _no_first_orbit(e: ShootingError, name: str, at: float, periods: int, transi
 
 
 def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_points, locate_tol, progress,
-            earlier: int = 0, prior: dict | None = None) -> str:
+            earlier: int = 0, prior: dict | None = None, stop: Callable[[list], str | None] | None = None) -> str:
     """Continue from the last point ``pts[-1]`` (unknowns ``X``, tangent ``T``) until the field leaves ``bounds``.
 
     Appends the points to ``pts`` and the special points to ``special`` as it finds them;
     returns why it stopped. ``prior``: a resumed branch's point before ``pts[0]`` (its
     ``state`` and ``param``), for the secant that the shots past a kink or a gap take while
     ``pts`` holds one point. ``earlier`` points before ``pts`` (a resumed branch's) count
-    toward ``max_points``, and progress reports the total.
+    toward ``max_points``, and progress reports the total. ``stop(pts)``, asked after every
+    regular point, may end the branch there, returning why.
     """
     fam, span = ctx.fam, ctx.span
     name = fam.name
@@ -1170,6 +1205,10 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         on_itself = overlap.verdict(pts, np.append(ctx.scale, span), taken) if new["regular"] else None
         if on_itself is not None:
             message = _on_itself(*on_itself, name, pts, earlier)
+            break
+        why = stop(pts) if stop is not None and new["regular"] else None
+        if why is not None:
+            message = why
             break
     else:
         message = f"stopped after max_points = {max_points} points at {name} = {X[-1] * span:.6g}"
