@@ -49,8 +49,9 @@ def register(subparsers) -> argparse.ArgumentParser:
                         "the map over T / d reduced by their symmetry (d = N / gcd(EO, N); 8 times fewer steps on "
                         "24 blades at engine order 3), the whole ring's multipliers from it (docs/orbits.md); "
                         "with --switch, the period-doubled branches (on the reduced map where it has a branch point at "
-                        "the doubling, else on the whole ring's map) and the branches crossing at branch points (on the "
-                        "map over 2 T / d where the reduced map period-doubles there, else on the whole ring's map)")
+                        "the doubling, else on the whole ring's map) and the branches crossing at branch points (on "
+                        "the map over 2 T / d where the reduced map period-doubles there, else on the whole ring's "
+                        "map)")
     p.add_argument("--switch", action="store_true",
                    help="also follow the period-doubled branch born at each period doubling found, and the branch "
                         "that crosses this one at each branch point (on identical blades: orbits that break their "
