@@ -116,7 +116,8 @@ def test_the_switch_is_refused_at_a_point_of_another_kind(symmetric):
 
 def test_continue_switches_at_branch_points(tmp_path, capsys):
     """``blademodel continue --switch`` follows the crossing branch at each branch point, saved beside ``--out``;
-    the report's crossing branches start at the branch points and their orbits break the symmetry."""
+    the report's crossing branches start at the branch points, their orbits break the symmetry, and each ends
+    where it meets the branch it crossed again, at the other branch point."""
     from blademodel.cli import main
     from blademodel.orbits.branch_file import load_branch
     out = tmp_path / "twin.nc"
@@ -128,6 +129,10 @@ def test_continue_switches_at_branch_points(tmp_path, capsys):
     for k, at in enumerate(bps):
         crossing = load_branch(tmp_path / f"twin_bp{k + 1}.nc")
         assert crossing.params[0] == at == rep["branched"][k]["values"][0]
+        # each ends where it comes back to the other branch point (the loop joins them), not going round it again
+        other = bps[1 - k]
+        assert crossing.message.startswith(f"met the branch it crossed again at its branch point omega = {other:.6g}")
+        assert abs(crossing.params[-2] - other) < 1e-3 * (2200 - 900)
         asym = np.max(np.abs(crossing.states - crossing.states[:, MIRROR]) / _scale(crossing.states), axis=1)
         assert asym[0] < 1e-9 and asym.max() > 0.5   # (it comes back to the symmetric orbits at the other one)
 

@@ -210,7 +210,7 @@ def run(args: argparse.Namespace) -> int:
                     return continuation(config, args.param, args.start, args.stop, periods=args.period,
                                         resume=resume, **shared, **kw)
                 return branch_point_branch(config, args.param, bp, args.start, args.stop, periods=args.period,
-                                           cyclic=args.cyclic, **shared, **kw)
+                                           cyclic=args.cyclic, crossed=branch, **shared, **kw)
             try:
                 branched.append(_continued(name, config, {**run_settings, "branch_point": k},
                                            f"branch from branch point {k}", args.param, crossing))

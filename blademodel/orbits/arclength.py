@@ -745,7 +745,8 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
                         kernel: str = "auto", jacobian: str = "auto", workers: int | None = None,
                         progress: Callable[[int, float], None] | None = None,
                         checkpoint: Callable[[Branch], None] | None = None,
-                        checkpoint_every: float = 30.0, cyclic: bool = False) -> Branch:
+                        checkpoint_every: float = 30.0, cyclic: bool = False,
+                        crossed: Branch | None = None) -> Branch:
     """The other branch of period-``periods`` orbits through a branch point of a branch.
 
     At a branch point a multiplier passes ``+1`` while the branch goes on: two branches
@@ -788,7 +789,12 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
         As for :func:`continuation`.
     cyclic : bool
         Follow the crossing branch on ``G^2`` where it can be (above); ``periods`` must then
-        be 1.
+        be 1. There it ends where it comes back to the travelling waves.
+    crossed : Branch, optional
+        The branch ``point`` lies on. The crossing branch ends where it comes back to one of
+        that branch's other branch points (its closest point within ``ds_max`` of it, in the
+        continuation's scaled unknowns): past it, it would go on beyond the branch it
+        crossed (on a symmetric structure, as its own mirror image).
 
     Returns
     -------
@@ -838,14 +844,45 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
             return True   # no orbit of the old branch there to come back to
         return float(np.max(np.abs(X1[:-1] * scale - y_old) / scale)) > 1e3 * tol
 
-    waves = None
+    ends = []
     if fam.symmetry is not None:   # followed on G^2: it ends where it comes back to the travelling waves
         from .cyclic import CyclicSymmetry
-        waves = _back_to_the_waves(CyclicSymmetry(fam.config_at(point.param), ig), name)
+        ends.append(_back_to_the_waves(CyclicSymmetry(fam.config_at(point.param), ig), name))
+    if crossed is not None:
+        others = [q for q in crossed.points("branch-point") if q.param != point.param]
+        if others:
+            ends.append(_back_to_the_crossed(ctx, others, ds_max))
+
+    def stop(pts):
+        return next((why for why in (end(pts) for end in ends) if why is not None), None)
+
     b = _switched(ctx, point, y, mode, v, off_the_old_branch, "the branch it crosses", (lo, hi), ds=ds,
                   ds_min=ds_min, ds_max=ds_max, max_points=max_points, locate_tol=locate_tol, progress=progress,
-                  checkpoint=checkpoint, checkpoint_every=checkpoint_every, stop=waves)
+                  checkpoint=checkpoint, checkpoint_every=checkpoint_every, stop=stop if ends else None)
     return replace(b, message=f"{b.message} ({whole})") if whole else b
+
+
+def _back_to_the_crossed(ctx, others: list, reach: float):
+    """For :func:`branch_point_branch` with ``crossed``: ``stop(pts)`` for :func:`_follow`, which ends the crossing
+    branch at its point closest to one of the crossed branch's other branch points ``others``, where that point
+    lies within ``reach`` of it (scaled unknowns: the state by ``ctx.scale``, the field by its span). The branch
+    passes through such a point where it comes back there, so its closest point is at most about half a step
+    away."""
+    def distance(q, b):
+        return math.hypot(float(np.linalg.norm((q["state"] - b.state) / ctx.scale)),
+                          (q["param"] - b.param) / ctx.span)
+
+    def stop(pts):
+        if len(pts) < 4:
+            return None
+        for b in others:
+            d0, d1, d2 = (distance(q, b) for q in pts[-3:])
+            if d1 <= reach and d1 < d0 and d1 <= d2:
+                return (f"met the branch it crossed again at its branch point {ctx.fam.name} = {b.param:.6g} (its "
+                        f"point at {pts[-2]['param']:.6g} the closest; past it the crossing branch goes on beyond "
+                        f"the branch it crossed)")
+        return None
+    return stop
 
 
 def _back_to_the_waves(sym, name: str):
