@@ -164,11 +164,10 @@ def branch_points_twin_blades():
     branches = [b]
     for k, bp in enumerate(b.points("branch-point"), 1):
         t = time.process_time()
-        c = branch_point_branch(cfg, "omega", bp, 900.0, 2200.0)
+        c = branch_point_branch(cfg, "omega", bp, 900.0, 2200.0, crossed=b)
         _report(f"  crossing branch {k} (from {bp.param:.5f})", c, t)
         branches.append(c)
-    # the branch from the lower point goes round both halves of the loop (the blades swapped); the one from the
-    # upper point, one half: blade 2 the loud one
+    # both run along the loop between the two branch points, from either end: one drawn
     branches = branches[:2]
     labels = ["blades alike", f"crossing at {b.points('branch-point')[0].param:.2f}"]
     fig = Figure(figsize=(10, 4.0))
