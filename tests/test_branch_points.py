@@ -198,3 +198,19 @@ def test_a_tuned_ring_s_travelling_wave_gives_way_between_two_branch_points():
     X = rec[1][:-1][:, xs]
     settled = np.sort(np.abs(2 * np.fft.rfft(X, axis=0)[1] / X.shape[0]))
     assert np.max(np.abs(settled - orbit)) < 1e-9 * orbit[-1]
+
+
+@pytest.mark.slow
+def test_continue_cyclic_switches_at_a_ring_s_branch_points(capsys):
+    """``blademodel continue --cyclic --switch`` on the ring of the test above: each crossing branch is followed on
+    the map over ``T / 4`` (its message names no whole map) and ends at the other branch point."""
+    from blademodel.cli import main
+    assert main(["continue", str(YAML.parent / "bladed_disk_24.yaml"), "--set", "F0=120", "--param", "omega",
+                 "--from", "315", "--to", "330", "--cyclic", "--switch", "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    bps = [p["value"] for p in rep["special"] if p["kind"] == "branch-point"]
+    assert len(bps) == len(rep["branched"]) == 2
+    for k, crossing in enumerate(rep["branched"]):
+        assert crossing["values"][0] == bps[k] and "whole ring" not in crossing["message"]
+        assert crossing["message"].startswith(("came back to the travelling waves", "met the branch it crossed"))
+        assert abs(crossing["values"][-2] - bps[1 - k]) < 0.1
