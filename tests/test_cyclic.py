@@ -274,3 +274,30 @@ def test_a_period_doubling_of_the_96_blade_ring_is_followed_on_the_reduced_map()
     ig = make_integrator(apply_overrides(cfg, {"omega": float(more.params[-1])}).build(), steps_per_period=600)
     end2, _ = PeriodMap(ig, 2)(more.states[-1], more.modes[-1].copy())
     assert np.max(np.abs(end2 - more.states[-1]) / scale) <= 1e-8
+
+
+@pytest.mark.slow
+def test_a_period_doubling_bubble_ends_where_it_comes_back_to_the_period_1_waves():
+    """The tuned 32-blade ring at engine order 4 (``T / 8`` again, as the 96-blade one at 12) doubles at 272.2745
+    and 275.7428 rad/s; the branch doubled at the first, on the reduced map and given its parent, swells into a loop
+    and ends at the second: its last points approach it in the field, and their orbits collapse onto period 1 (the
+    whole ring's one-period residual falls to a small fraction of its size inside the bubble), where before it went
+    on round the same orbits a period later until the self-overlap check stopped it."""
+    from blademodel.orbits import period_doubled_branch
+    cfg = apply_overrides(load_config(MODELS / "bladed_disk_24.yaml"), {"blades": "32", "engine_order": "4"})
+    b = continuation(cfg, "omega", 271.5, 276.5, workers=1, cyclic=True, steps_per_period=SPP)
+    first, *_, last = b.points("period-doubling")
+    d = period_doubled_branch(cfg, "omega", first, 271.5, 276.5, workers=1, cyclic=True, steps_per_period=SPP,
+                              parent=b)
+    assert d.message.startswith(f"came back to the period-1 orbits at their period doubling omega = {last.param:.6g}")
+    assert abs(d.params[-2] - last.param) < 1e-2 and d.params.max() < last.param + 1e-2
+    ig = make_integrator(cfg.build(), steps_per_period=SPP)
+
+    def one_period_off(j):   # how far the orbit at point j is from period 1
+        P = PeriodMap(ig.with_parameters(apply_overrides(cfg, {"omega": str(d.params[j])}).build()), 1)
+        y = d.states[j]
+        z = np.zeros(ig.n_state)
+        z[:y.size] = y
+        return float(np.max(np.abs(P(y.copy(), ig.mode_of(z))[0] - y)))
+    inside = one_period_off(int(np.argmin(np.abs(d.params - 274.0))))
+    assert one_period_off(d.params.size - 2) < 0.2 * inside

@@ -191,7 +191,7 @@ def run(args: argparse.Namespace) -> int:
                     return continuation(config, args.param, args.start, args.stop, periods=2 * args.period,
                                         resume=resume, **shared, **kw)
                 return period_doubled_branch(config, args.param, pd, args.start, args.stop, periods=args.period,
-                                             cyclic=args.cyclic, **shared, **kw)
+                                             cyclic=args.cyclic, parent=branch, **shared, **kw)
             try:
                 doubled.append(_continued(name, config, {**run_settings, "doubling": k},
                                           f"period-doubled branch {k}", args.param, switched))

@@ -613,7 +613,8 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
                           jacobian: str = "auto", workers: int | None = None,
                           progress: Callable[[int, float], None] | None = None,
                           checkpoint: Callable[[Branch], None] | None = None,
-                          checkpoint_every: float = 30.0, cyclic: bool = False) -> Branch:
+                          checkpoint_every: float = 30.0, cyclic: bool = False,
+                          parent: Branch | None = None) -> Branch:
     """The branch of period-``2 periods`` orbits born at a period doubling of a period-``periods`` branch.
 
     At a period doubling the map over ``periods`` excitation periods has the multiplier
@@ -655,6 +656,11 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
     cyclic : bool
         Follow the new branch on the reduced map where it can be (above); ``periods`` must
         then be 1.
+    parent : Branch, optional
+        The branch ``point`` lies on. The new branch ends where it comes back to one of that
+        branch's other period doublings (its point closest to it, within ``ds_max``): a
+        **period-doubling bubble**, past which it would go round the same orbits again, each
+        taken a period later.
 
     Returns
     -------
@@ -703,9 +709,13 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
         y1 = X1[:-1] * scale
         return np.max(np.abs(old(y1, _copy(m1))[0] - y1) / scale) > 1e3 * tol
 
+    others = [] if parent is None else [q for q in parent.points("period-doubling") if q.param != point.param]
+    end = _back_to(ctx, others, ds_max, f"came back to the period-{periods} orbits at their period doubling",
+                   "a period-doubling bubble: past it the branch goes round the same orbits, each taken a period "
+                   "later") if others else None
     b = _switched(ctx, point, y, mode, v, new_orbit, f"the period-{periods} orbits", (lo, hi), ds=ds,
                   ds_min=ds_min, ds_max=ds_max, max_points=max_points, locate_tol=locate_tol, progress=progress,
-                  checkpoint=checkpoint, checkpoint_every=checkpoint_every)
+                  checkpoint=checkpoint, checkpoint_every=checkpoint_every, stop=end)
     return replace(b, message=f"{b.message} ({whole})") if whole else b
 
 
@@ -851,7 +861,8 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
     if crossed is not None:
         others = [q for q in crossed.points("branch-point") if q.param != point.param]
         if others:
-            ends.append(_back_to_the_crossed(ctx, others, ds_max))
+            ends.append(_back_to(ctx, others, ds_max, "met the branch it crossed again at its branch point",
+                                 "past it the crossing branch goes on beyond the branch it crossed"))
 
     def stop(pts):
         return next((why for why in (end(pts) for end in ends) if why is not None), None)
@@ -862,12 +873,12 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
     return replace(b, message=f"{b.message} ({whole})") if whole else b
 
 
-def _back_to_the_crossed(ctx, others: list, reach: float):
-    """For :func:`branch_point_branch` with ``crossed``: ``stop(pts)`` for :func:`_follow`, which ends the crossing
-    branch at its point closest to one of the crossed branch's other branch points ``others``, where that point
-    lies within ``reach`` of it (scaled unknowns: the state by ``ctx.scale``, the field by its span). The branch
-    passes through such a point where it comes back there, so its closest point is at most about half a step
-    away."""
+def _back_to(ctx, others: list, reach: float, met: str, past: str):
+    """``stop(pts)`` for :func:`_follow`, which ends a switched branch at its point closest to one of the special
+    points ``others`` of the branch it left (its other branch points or period doublings), where that point lies
+    within ``reach`` of it (scaled unknowns: the state by ``ctx.scale``, the field by its span). The branch passes
+    through such a point where it comes back there, so its closest point is at most about half a step away. The
+    message says it ``met`` the point there, and what lies ``past`` it."""
     def distance(q, b):
         return math.hypot(float(np.linalg.norm((q["state"] - b.state) / ctx.scale)),
                           (q["param"] - b.param) / ctx.span)
@@ -878,9 +889,8 @@ def _back_to_the_crossed(ctx, others: list, reach: float):
         for b in others:
             d0, d1, d2 = (distance(q, b) for q in pts[-3:])
             if d1 <= reach and d1 < d0 and d1 <= d2:
-                return (f"met the branch it crossed again at its branch point {ctx.fam.name} = {b.param:.6g} (its "
-                        f"point at {pts[-2]['param']:.6g} the closest; past it the crossing branch goes on beyond "
-                        f"the branch it crossed)")
+                return (f"{met} {ctx.fam.name} = {b.param:.6g} (its point at {pts[-2]['param']:.6g} the closest; "
+                        f"{past})")
         return None
     return stop
 
