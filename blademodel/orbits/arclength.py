@@ -710,9 +710,19 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
         return np.max(np.abs(old(y1, _copy(m1))[0] - y1) / scale) > 1e3 * tol
 
     others = [] if parent is None else [q for q in parent.points("period-doubling") if q.param != point.param]
-    end = _back_to(ctx, others, ds_max, f"came back to the period-{periods} orbits at their period doubling",
-                   "a period-doubling bubble: past it the branch goes round the same orbits, each taken a period "
-                   "later") if others else None
+    def splitting(q):   # how far the doubled orbit is from period ``periods``: its Poincare samples a period apart
+        S = q["sections"]
+        return float(np.max(np.abs(S[periods:] - S[:periods]) / ctx.scale))
+
+    ends = [_landed_on(splitting, tol, name, periods)]
+    if others:
+        ends.append(_back_to(ctx, others, ds_max, f"came back to the period-{periods} orbits at their period "
+                             f"doubling", "a period-doubling bubble: past it the branch goes round the same orbits, "
+                             "each taken a period later", splitting))
+
+    def end(pts):
+        return next((why for why in (e(pts) for e in ends) if why is not None), None)
+
     b = _switched(ctx, point, y, mode, v, new_orbit, f"the period-{periods} orbits", (lo, hi), ds=ds,
                   ds_min=ds_min, ds_max=ds_max, max_points=max_points, locate_tol=locate_tol, progress=progress,
                   checkpoint=checkpoint, checkpoint_every=checkpoint_every, stop=end)
@@ -873,22 +883,56 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
     return replace(b, message=f"{b.message} ({whole})") if whole else b
 
 
-def _back_to(ctx, others: list, reach: float, met: str, past: str):
+def _landed_on(splitting, tol: float, name: str, periods: int):
+    """``stop(pts)`` for :func:`_follow`, which ends a period-doubled branch whose newest orbit is one of period
+    ``periods`` again (its ``splitting`` at most ``1e3 tol``): past a gap or a kink the corrections found the
+    branch it left, traversed twice, and would follow it as if it were doubled (measured: the 96-blade ring's
+    branch doubled at 273.89 rad/s, from 273.834 rad/s on, across a gap)."""
+    def stop(pts):
+        if len(pts) < 3:
+            return None
+        s = splitting(pts[-1])
+        if s > 1e3 * tol:
+            return None
+        return (f"landed on the period-{periods} orbits at {name} = {pts[-1]['param']:.6g} (its orbit a period apart "
+                f"differs by {s:.2g} of the scale: the corrections found the branch it left, traversed twice)")
+    return stop
+
+
+#: A doubled branch ends at its parent's other period doubling only where its orbits' splitting (how far they are
+#: from their parent's period) has fallen there below this fraction of its largest on the branch (:func:`_back_to`).
+COLLAPSED = 0.1
+
+
+def _back_to(ctx, others: list, reach: float, met: str, past: str, splitting=None):
     """``stop(pts)`` for :func:`_follow`, which ends a switched branch at its point closest to one of the special
     points ``others`` of the branch it left (its other branch points or period doublings), where that point lies
     within ``reach`` of it (scaled unknowns: the state by ``ctx.scale``, the field by its span). The branch passes
     through such a point where it comes back there, so its closest point is at most about half a step away. The
-    message says it ``met`` the point there, and what lies ``past`` it."""
+    message says it ``met`` the point there, and what lies ``past`` it.
+
+    ``splitting(q)``, where given, measures how far the orbit of point ``q`` lies from the
+    branch left (a doubled orbit from period 1): it must have fallen to :data:`COLLAPSED` of
+    its largest on the branch at that point too, so that a branch that only runs close to
+    the one it left (doubled orbits hardly split) does not end where it passes near one of
+    its special points (measured: the 96-blade ring's branch doubled at 273.89 rad/s passed
+    within ``reach`` of the doubling at 272.27 without coming back to it).
+    """
     def distance(q, b):
         return math.hypot(float(np.linalg.norm((q["state"] - b.state) / ctx.scale)),
                           (q["param"] - b.param) / ctx.span)
 
+    largest = [0.0]
+
     def stop(pts):
+        if splitting is not None:
+            largest[0] = max(largest[0], splitting(pts[-1]))
         if len(pts) < 4:
             return None
         for b in others:
             d0, d1, d2 = (distance(q, b) for q in pts[-3:])
-            if d1 <= reach and d1 < d0 and d1 <= d2:
+            if d1 <= reach and d1 < d0 and d1 <= d2 and \
+                    (splitting is None or splitting(pts[-2]) <= COLLAPSED * largest[0]):
                 return (f"{met} {ctx.fam.name} = {b.param:.6g} (its point at {pts[-2]['param']:.6g} the closest; "
                         f"{past})")
         return None
