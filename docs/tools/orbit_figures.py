@@ -138,7 +138,7 @@ def doublings_bladed_disk():
     branches = [b]
     for k, pd in enumerate(b.points("period-doubling"), 1):
         t = time.process_time()
-        d = period_doubled_branch(cfg, "omega", pd, 271.5, 276.5, cyclic=True, max_points=300, **kw)
+        d = period_doubled_branch(cfg, "omega", pd, 271.5, 276.5, cyclic=True, max_points=300, parent=b, **kw)
         _report(f"  doubled branch {k} (from {pd.param:.6f})", d, t)
         branches.append(d)
     fig = Figure(figsize=(10, 4.4))
