@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import sys
@@ -176,51 +177,49 @@ def run(args: argparse.Namespace) -> int:
                   file=sys.stderr)
         return 1
     doubled, branched, doubled_files = [], [], []
-    if args.switch:
-        for k, pd in enumerate(branch.points("period-doubling"), 1):
-            name = str(Path(args.out).with_name(f"{Path(args.out).stem}_pd{k}.nc")) if args.out else None
 
-            def switched(resume, pd=pd, **kw):
-                if resume is not None:   # an unfinished period-doubled branch goes on as any branch
-                    if args.cyclic:   # on the reduced map where it was followed there (its orbits G's fixed points)
-                        try:
-                            return continuation(config, args.param, args.start, args.stop, periods=2 * args.period,
-                                                resume=resume, cyclic=True, **shared, **kw)
-                        except CyclicError:
-                            pass
+    def switch_at(points, tag, key, label, what, follow) -> list:
+        """The branch ``follow(point, resume=..., ...)`` from each of ``points``, saved beside ``--out`` as
+        FILE_<tag>1.nc, ... (None where the switch failed, with a warning)."""
+        out = []
+        for k, p in enumerate(points, 1):
+            name = str(Path(args.out).with_name(f"{Path(args.out).stem}_{tag}{k}.nc")) if args.out else None
+            try:
+                out.append(_continued(name, config, {**run_settings, key: k}, f"{label} {k}", args.param,
+                                      functools.partial(follow, p)))
+            except (ShootingError, FlowError) as e:
+                print(f"warning: no switch at the {what} {k} ({args.param} = {p.param:.6g}): {e}", file=sys.stderr)
+                out.append(None)
+                continue
+            if name:
+                doubled_files.append(name)
+        return out
+
+    def switched(pd, resume, **kw):
+        if resume is not None:   # an unfinished period-doubled branch goes on as any branch
+            if args.cyclic:   # on the reduced map where it was followed there (its orbits G's fixed points)
+                try:
                     return continuation(config, args.param, args.start, args.stop, periods=2 * args.period,
-                                        resume=resume, **shared, **kw)
-                return period_doubled_branch(config, args.param, pd, args.start, args.stop, periods=args.period,
-                                             cyclic=args.cyclic, parent=branch, **shared, **kw)
-            try:
-                doubled.append(_continued(name, config, {**run_settings, "doubling": k},
-                                          f"period-doubled branch {k}", args.param, switched))
-            except (ShootingError, FlowError) as e:
-                print(f"warning: no switch at the period doubling {k} ({args.param} = {pd.param:.6g}): {e}",
-                      file=sys.stderr)
-                doubled.append(None)
-                continue
-            if name:
-                doubled_files.append(name)
-        for k, bp in enumerate(branch.points("branch-point"), 1):
-            name = str(Path(args.out).with_name(f"{Path(args.out).stem}_bp{k}.nc")) if args.out else None
+                                        resume=resume, cyclic=True, **shared, **kw)
+                except CyclicError:
+                    pass
+            return continuation(config, args.param, args.start, args.stop, periods=2 * args.period,
+                                resume=resume, **shared, **kw)
+        return period_doubled_branch(config, args.param, pd, args.start, args.stop, periods=args.period,
+                                     cyclic=args.cyclic, parent=branch, **shared, **kw)
 
-            def crossing(resume, bp=bp, **kw):
-                if resume is not None:   # an unfinished crossing branch goes on as any branch, on the whole map
-                    return continuation(config, args.param, args.start, args.stop, periods=args.period,
-                                        resume=resume, **shared, **kw)
-                return branch_point_branch(config, args.param, bp, args.start, args.stop, periods=args.period,
-                                           cyclic=args.cyclic, crossed=branch, **shared, **kw)
-            try:
-                branched.append(_continued(name, config, {**run_settings, "branch_point": k},
-                                           f"branch from branch point {k}", args.param, crossing))
-            except (ShootingError, FlowError) as e:
-                print(f"warning: no switch at the branch point {k} ({args.param} = {bp.param:.6g}): {e}",
-                      file=sys.stderr)
-                branched.append(None)
-                continue
-            if name:
-                doubled_files.append(name)
+    def crossing(bp, resume, **kw):
+        if resume is not None:   # an unfinished crossing branch goes on as any branch, on the whole map
+            return continuation(config, args.param, args.start, args.stop, periods=args.period,
+                                resume=resume, **shared, **kw)
+        return branch_point_branch(config, args.param, bp, args.start, args.stop, periods=args.period,
+                                   cyclic=args.cyclic, crossed=branch, **shared, **kw)
+
+    if args.switch:
+        doubled = switch_at(branch.points("period-doubling"), "pd", "doubling", "period-doubled branch",
+                            "period doubling", switched)
+        branched = switch_at(branch.points("branch-point"), "bp", "branch_point", "branch from branch point",
+                             "branch point", crossing)
     state = args.state or branch.state_names[0]
     if state not in branch.state_names:
         raise ValueError(f"--state {state!r}: not a state of the model ({', '.join(branch.state_names)})")

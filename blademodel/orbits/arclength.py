@@ -679,24 +679,10 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
     ContinuationInterrupted
         On Ctrl-C, with the branch so far.
     """
-    if point.kind != "period-doubling":
-        raise ValueError(f"point must be a period-doubling point, got a {point.kind!r} point")
-    lo, hi = min(start, stop), max(start, stop)
-    if not lo <= point.param <= hi:
-        raise ValueError(f"the period doubling at {name} = {point.param:g} lies outside [{lo:g}, {hi:g}]")
-    _check_grazing_tol(grazing_tol)
     settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
-    fam = _Family(config, name, 2 * periods, settings, point.param, jacobian, bounds=(start, stop), workers=workers)
+    fam, ig, y, mode, scale, (lo, hi) = _at_point(config, name, point, "period-doubling", "period doubling", start,
+                                                  stop, 2 * periods, settings, jacobian, workers, grazing_tol)
     span = hi - lo
-    P2 = fam.map_at(point.param)
-    ig = P2.integrator
-    y = np.asarray(point.state, dtype=float)
-    mode = point.mode
-    if mode is None:
-        full = np.zeros(ig.n_state)
-        full[:y.size] = y
-        mode = ig.mode_of(full)
-    scale = _state_scale(_orbit_samples(ig, y, mode, 2 * periods)[1], _n_coordinates(ig))
     old = PeriodMap(ig, periods, jacobian, workers)   # the period-``periods`` map
     v, whole = None, ""
     if cyclic:
@@ -719,14 +705,50 @@ def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, 
         ends.append(_back_to(ctx, others, ds_max, f"came back to the period-{periods} orbits at their period "
                              f"doubling", "a period-doubling bubble: past it the branch goes round the same orbits, "
                              "each taken a period later", splitting))
-
-    def end(pts):
-        return next((why for why in (e(pts) for e in ends) if why is not None), None)
-
     b = _switched(ctx, point, y, mode, v, new_orbit, f"the period-{periods} orbits", (lo, hi), ds=ds,
                   ds_min=ds_min, ds_max=ds_max, max_points=max_points, locate_tol=locate_tol, progress=progress,
-                  checkpoint=checkpoint, checkpoint_every=checkpoint_every, stop=end)
+                  checkpoint=checkpoint, checkpoint_every=checkpoint_every, stop=_first_end(ends))
     return replace(b, message=f"{b.message} ({whole})") if whole else b
+
+
+def _at_point(config, name, point: SpecialPoint, kind: str, what: str, start, stop, periods: int, settings,
+              jacobian, workers, grazing_tol) -> tuple:
+    """What a switch at the bifurcation ``point`` (of ``kind``, named ``what`` in errors) starts from:
+    ``(family, integrator, state, mode, scale, (lo, hi))``, the family's maps over ``periods`` and the state scaled
+    by the excursions of its orbit over them.
+
+    Raises
+    ------
+    ValueError
+        If ``point`` is of another kind or lies outside ``[start, stop]``.
+    """
+    if point.kind != kind:
+        raise ValueError(f"point must be a {what}, got a {point.kind!r} point")
+    lo, hi = min(start, stop), max(start, stop)
+    if not lo <= point.param <= hi:
+        raise ValueError(f"the {what} at {name} = {point.param:g} lies outside [{lo:g}, {hi:g}]")
+    _check_grazing_tol(grazing_tol)
+    fam = _Family(config, name, periods, settings, point.param, jacobian, bounds=(start, stop), workers=workers)
+    ig = fam.map_at(point.param).integrator
+    y = np.asarray(point.state, dtype=float)
+    mode = point.mode
+    if mode is None:
+        full = np.zeros(ig.n_state)
+        full[:y.size] = y
+        mode = ig.mode_of(full)
+    scale = _state_scale(_orbit_samples(ig, y, mode, periods)[1], _n_coordinates(ig))
+    return fam, ig, y, mode, scale, (lo, hi)
+
+
+def _first_end(ends: list):
+    """``stop(pts)`` for :func:`_follow` that asks each of ``ends`` in turn (the first reason given ends the
+    branch), or None where there are none."""
+    if not ends:
+        return None
+
+    def stop(pts):
+        return next((why for why in (end(pts) for end in ends) if why is not None), None)
+    return stop
 
 
 def _switched(ctx, point: SpecialPoint, y, mode, v, is_new, old: str, bounds, *, ds, **follow) -> Branch:
@@ -831,23 +853,10 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
     ContinuationInterrupted
         On Ctrl-C, with the branch so far.
     """
-    if point.kind != "branch-point":
-        raise ValueError(f"point must be a branch point, got a {point.kind!r} point")
-    lo, hi = min(start, stop), max(start, stop)
-    if not lo <= point.param <= hi:
-        raise ValueError(f"the branch point at {name} = {point.param:g} lies outside [{lo:g}, {hi:g}]")
-    _check_grazing_tol(grazing_tol)
     settings = dict(steps_per_period=steps_per_period, event_tol=event_tol, method=method, kernel=kernel)
-    fam = _Family(config, name, periods, settings, point.param, jacobian, bounds=(start, stop), workers=workers)
+    fam, ig, y, mode, scale, (lo, hi) = _at_point(config, name, point, "branch-point", "branch point", start, stop,
+                                                  periods, settings, jacobian, workers, grazing_tol)
     P = fam.map_at(point.param)
-    ig = P.integrator
-    y = np.asarray(point.state, dtype=float)
-    mode = point.mode
-    if mode is None:
-        full = np.zeros(ig.n_state)
-        full[:y.size] = y
-        mode = ig.mode_of(full)
-    scale = _state_scale(_orbit_samples(ig, y, mode, periods)[1], _n_coordinates(ig))
     v, whole = None, ""
     if cyclic:
         v, whole = _reduced_crossing(fam, ig, point, y, mode, scale, rel_step, periods)
@@ -873,13 +882,9 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
         if others:
             ends.append(_back_to(ctx, others, ds_max, "met the branch it crossed again at its branch point",
                                  "past it the crossing branch goes on beyond the branch it crossed"))
-
-    def stop(pts):
-        return next((why for why in (end(pts) for end in ends) if why is not None), None)
-
     b = _switched(ctx, point, y, mode, v, off_the_old_branch, "the branch it crosses", (lo, hi), ds=ds,
                   ds_min=ds_min, ds_max=ds_max, max_points=max_points, locate_tol=locate_tol, progress=progress,
-                  checkpoint=checkpoint, checkpoint_every=checkpoint_every, stop=stop if ends else None)
+                  checkpoint=checkpoint, checkpoint_every=checkpoint_every, stop=_first_end(ends))
     return replace(b, message=f"{b.message} ({whole})") if whole else b
 
 
@@ -973,17 +978,11 @@ def _reduced_crossing(fam, ig, point, y, mode, scale, rel_step, periods) -> tupl
     """For :func:`branch_point_branch` with ``cyclic``: the direction (scaled, unit) along which the crossing
     branch leaves the branch point on ``G^2``, ``fam`` reduced by that symmetry from then on; or ``(None, why)``
     where the whole map must take it (``fam`` left as it is)."""
-    from .cyclic import CyclicError, CyclicSymmetry
-    if periods != 1:
-        raise CyclicError(f"the cyclic reduction follows the branch points of period-1 orbits, not of periods = "
-                          f"{periods}")
-    sym = CyclicSymmetry(fam.config_at(point.param), ig)
-    G = PeriodMap(ig, 1, fam.jacobian, fam.workers, symmetry=sym)
-    off = float(np.max(np.abs(G(y, _copy(mode))[0] - y) / scale))
-    if off > WAVE_TOL:
-        return None, (f"on the whole ring's map: the orbit at the branch point is no travelling wave ({off:.3g} "
-                      f"scaled from itself under the reduced map)")
-    lam, v = _critical_direction(G.jacobian(y, _copy(mode), scale, rel_step), -1.0, scale)
+    from .cyclic import CyclicSymmetry
+    sym = CyclicSymmetry(fam.config_at(point.param), ig) if periods == 1 else None
+    lam, v, why = _reduced_direction(fam, ig, sym, y, mode, scale, rel_step, periods, -1.0, "branch point")
+    if why:
+        return None, why
     if abs(lam + 1.0) > BRANCH_POINT_TOL or sym.fraction % 2:
         return None, (f"on the whole ring's map: the reduced map does not period-double there (its eigenvalue "
                       f"nearest -1 is {complex(lam):.4g}, over T / {sym.fraction}), so the crossing orbits keep no "
@@ -1002,21 +1001,33 @@ def _reduced_branch_point(fam, ig, point, y, mode, scale, rel_step, periods) -> 
     """For :func:`period_doubled_branch` with ``cyclic``: the direction (scaled, unit) along which the doubled
     branch leaves the reduced map's branch point, ``fam`` reduced from then on; or ``(None, why)`` where the whole
     map must take it (``fam`` left as it is)."""
-    from .cyclic import CyclicError, CyclicSymmetry
-    if periods != 1:
-        raise CyclicError(f"the cyclic reduction follows the doubling of period-1 orbits, not of periods = {periods}")
-    sym = CyclicSymmetry(fam.config_at(point.param), ig, periods=2)
-    G = PeriodMap(ig, 1, fam.jacobian, fam.workers, symmetry=sym)
-    off = float(np.max(np.abs(G(y, _copy(mode))[0] - y) / scale))
-    if off > WAVE_TOL:
-        return None, (f"on the whole ring's map: the orbit at the doubling is no travelling wave ({off:.3g} scaled "
-                      f"from itself under the reduced map)")
-    lam, v = _critical_direction(G.jacobian(y, _copy(mode), scale, rel_step), 1.0, scale)
+    from .cyclic import CyclicSymmetry
+    sym = CyclicSymmetry(fam.config_at(point.param), ig, periods=2) if periods == 1 else None
+    lam, v, why = _reduced_direction(fam, ig, sym, y, mode, scale, rel_step, periods, 1.0, "doubling")
+    if why:
+        return None, why
     if abs(lam - 1.0) > BRANCH_POINT_TOL:
         return None, (f"on the whole ring's map: the reduced map has no branch point there (its eigenvalue nearest "
                       f"+1 is {complex(lam):.4g}), so the doubled orbits break the reduction's symmetry")
     fam.reduce_by(sym)
     return v, ""
+
+
+def _reduced_direction(fam, ig, sym, y, mode, scale, rel_step, periods: int, target: float, what: str) -> tuple:
+    """``(eigenvalue, direction, "")`` of the reduced map (``symmetry=sym``) at the ring's orbit ``y`` at a
+    bifurcation: its Jacobian's eigenvalue nearest ``target`` and that eigenvector (:func:`_critical_direction`);
+    or ``(None, None, why)`` where the orbit is no travelling wave (the whole map must take it). The reduction
+    follows the bifurcations (``what``) of period-1 orbits only."""
+    from .cyclic import CyclicError
+    if periods != 1:
+        raise CyclicError(f"the cyclic reduction follows the {what}s of period-1 orbits, not of periods = {periods}")
+    G = PeriodMap(ig, 1, fam.jacobian, fam.workers, symmetry=sym)
+    off = float(np.max(np.abs(G(y, _copy(mode))[0] - y) / scale))
+    if off > WAVE_TOL:
+        return None, None, (f"on the whole ring's map: the orbit at the {what} is no travelling wave ({off:.3g} "
+                            f"scaled from itself under the reduced map)")
+    lam, v = _critical_direction(G.jacobian(y, _copy(mode), scale, rel_step), target, scale)
+    return lam, v, ""
 
 
 def _critical_direction(J, target: float, scale) -> tuple:
