@@ -6,7 +6,7 @@ import time
 import numpy as np
 
 from blademodel.orbits import continuation
-from blademodel.orbits.arclength import SpecialPoint
+from blademodel.orbits.branch import SpecialPoint
 from blademodel.orbits.background import Locator, PendingPoint, resolve
 from blademodel.zheng2022 import BladePair
 

@@ -606,7 +606,7 @@ class _SyntheticBranch:
     stability change by :meth:`_Context._locate_crossing` without integrating anything."""
 
     def __init__(self, mu, fails_within=(0.0, 0.0)):
-        from blademodel.orbits.arclength import _Context
+        from blademodel.orbits.corrector import _Context
         self.mu, self.trials, self.fails_within = mu, 0, fails_within
         ctx = _Context.__new__(_Context)
         ctx.span = 1.0
@@ -637,7 +637,7 @@ def test_a_multiplier_that_jumps_across_the_circle_is_a_border_collision():
     of its first width, as a border collision, past the jump and within that width of it; a continuous crossing
     (through the circle at s = 0.2, however steep) is located to the tolerance and is no border collision; where
     trials beside the jump fail, it is one if the bracket had shrunk to a tenth (not if the first trial failed)."""
-    from blademodel.orbits.arclength import JUMP_NARROWING
+    from blademodel.orbits.corrector import JUMP_NARROWING
     jump = _SyntheticBranch(lambda s: 0.8 if s < 0.3137 else 1.1)
     s, bracket = jump.locate()
     assert bracket is not None and bracket[0] < 0.3137 <= bracket[1] and bracket[1] - bracket[0] <= JUMP_NARROWING

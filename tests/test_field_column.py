@@ -5,6 +5,7 @@ import pytest
 
 from blademodel.orbits import continuation
 from blademodel.orbits import arclength as al
+from blademodel.orbits import corrector
 from blademodel.zheng2022 import BladePair
 
 
@@ -24,11 +25,11 @@ def test_the_end_tangent_converges_at_the_polynomial_s_order(points, order):
     against the quadratic, rests on that."""
     offsets = np.array([-3.0, -1.7, -1.0, 0.0])[-points:]
     hs = [0.02, 0.01, 0.005]
-    errors = [np.linalg.norm(al._end_tangent([_curve(0.7 + h * o) for o in offsets]) - _curve_tangent(0.7))
+    errors = [np.linalg.norm(corrector._end_tangent([_curve(0.7 + h * o) for o in offsets]) - _curve_tangent(0.7))
               for h in hs]
     measured = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
     assert np.all(np.abs(measured - order) < 0.25), measured
-    assert al._end_tangent([_curve(0.1), _curve(0.1), _curve(0.3)]) is None   # coinciding points
+    assert corrector._end_tangent([_curve(0.1), _curve(0.1), _curve(0.3)]) is None   # coinciding points
 
 
 class _Run:
@@ -88,7 +89,7 @@ def test_the_column_from_the_points_equals_central_differences_and_leaves_the_br
     finally:
         mp.undo()
     assert len(checked) > 0.8 * with_rule.params.size
-    assert max(checked) < al.COLUMN_ACCURACY
+    assert max(checked) < corrector.COLUMN_ACCURACY
     mp.setattr(al._Context, "column_rule", lambda self, pts: None)
     try:
         without = continuation(cfg, "omega", 408.0, 420.0, ds=0.0025, ds_max=0.005, workers=1)

@@ -119,7 +119,7 @@ def test_a_ring_integrator_takes_parameter_values_as_with_parameters_does():
     ``with_parameters``, bit for bit; a wrong vector is refused naming the parameters, a stiff contact's step
     as at construction; and a continuation of a ring in omega moves its parameters along the field's path."""
     from blademodel.config import BladedDisk
-    from blademodel.orbits.arclength import _Family
+    from blademodel.orbits.family import _Family
     # the Coulomb ring of the test above: its kernel is compiled once for both
     cfg = BladedDisk(blades=4, engine_order=1, friction="coulomb", mistuning=[0, 0.03, -0.02, 0.01])
     ig = make_integrator(cfg.build())

@@ -1,12 +1,13 @@
-"""Where a switched branch ends: back at another special point of the branch it left (``arclength._back_to``), or
-landed on that branch itself (``arclength._landed_on``). The rules on made-up points; the models' branches are in
+"""Where a switched branch ends: back at another special point of the branch it left (``switching._back_to``), or
+landed on that branch itself (``switching._landed_on``). The rules on made-up points; the models' branches are in
 ``tests/test_branch_points.py`` and ``tests/test_cyclic.py`` (slow)."""
 
 from types import SimpleNamespace
 
 import numpy as np
 
-from blademodel.orbits.arclength import SpecialPoint, _back_to, _landed_on
+from blademodel.orbits.branch import SpecialPoint
+from blademodel.orbits.switching import _back_to, _landed_on
 
 
 def _ctx():
@@ -47,3 +48,4 @@ def test_a_doubled_branch_ends_where_its_orbits_are_of_the_old_period_again():
     assert stop(pts).startswith("landed on the period-1 orbits at omega = 1.2 (its orbit a period apart differs by "
                                 "3e-10")
     assert stop(pts[:2] + [_point(1.2, [0, 0], 2e-7)]) is None
+

@@ -15,7 +15,7 @@ from blademodel.numeric.kernels import make_integrator
 from blademodel.numeric.methods import get_method
 from blademodel.numeric.tangent import SensitivityError, flow_sensitivity
 from blademodel.orbits import PeriodMap
-from blademodel.orbits.arclength import _Family
+from blademodel.orbits.family import _Family
 from linear_reference import linear_parts
 
 

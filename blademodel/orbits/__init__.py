@@ -13,10 +13,11 @@ config field; :func:`period_doubled_branch` switches to the branch born at a per
 doubling, :func:`branch_point_branch` to the one that crosses it at a branch point.
 """
 
-from .arclength import (Branch, ContinuationInterrupted, SpecialPoint, branch_point_branch, continuation,
-                        period_doubled_branch)
+from .arclength import continuation
+from .branch import Branch, ContinuationInterrupted, SpecialPoint
 from .period_map import FlowError, PeriodMap
 from .shooting import PeriodicOrbit, ShootingError, find_periodic_orbit
+from .switching import branch_point_branch, period_doubled_branch
 
 __all__ = ["Branch", "ContinuationInterrupted", "FlowError", "PeriodMap", "PeriodicOrbit", "ShootingError",
            "SpecialPoint", "branch_point_branch", "continuation", "find_periodic_orbit", "period_doubled_branch"]

@@ -69,7 +69,7 @@ class PendingPoint:
         list of them (several grazing points within one step), in order.
     locator : Locator
     finish : callable
-        ``finish(located)``: the :class:`~blademodel.orbits.arclength.SpecialPoint`.
+        ``finish(located)``: the :class:`~blademodel.orbits.branch.SpecialPoint`.
     index : int
         The branch point after which it lies.
     bracket : tuple of float, optional

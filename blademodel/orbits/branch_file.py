@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import __version__
 from ..sweep.cf import CONVENTIONS, field_metadata
-from .arclength import Branch, SpecialPoint
+from .branch import Branch, SpecialPoint
 
 #: Global attribute ``blademodel_kind`` of a branch file.
 KIND = "branch"

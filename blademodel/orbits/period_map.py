@@ -465,7 +465,7 @@ def _key(mode):
 
 def kernel_mode(integrator, mode):
     """``mode`` as ``integrator`` takes it: a number on the product-mode kernel (also from a one-entry row of
-    :attr:`~blademodel.orbits.arclength.Branch.modes`), an array of each contact's mode on the per-contact
+    :attr:`~blademodel.orbits.branch.Branch.modes`), an array of each contact's mode on the per-contact
     kernel; ``None`` stays None.
 
     Raises

@@ -131,7 +131,7 @@ def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, trans
     guess : array_like or dict, optional
         State at ``t = 0``; by default the state after ``transient`` periods from rest.
     mode : int or array, optional
-        The guess's hybrid mode (a row of :attr:`~blademodel.orbits.arclength.Branch.modes`
+        The guess's hybrid mode (a row of :attr:`~blademodel.orbits.branch.Branch.modes`
         will do); by default the one its state belongs to.
     transient : int
         Periods integrated from rest (or from ``guess``) before the first step.
