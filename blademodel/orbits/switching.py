@@ -295,11 +295,11 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
         return float(np.max(np.abs(X1[:-1] * scale - y_old) / scale)) > 1e3 * tol
 
     ends = []
+    others = [] if crossed is None else [q for q in crossed.points("branch-point") if q.param != point.param]
     if fam.symmetry is not None:   # followed on G^2: it ends where it comes back to the travelling waves
         from .cyclic import CyclicSymmetry
-        ends.append(_back_to_the_waves(CyclicSymmetry(fam.config_at(point.param), ig), name))
+        ends.append(_back_to_the_waves(CyclicSymmetry(fam.config_at(point.param), ig), name, others))
     if crossed is not None:
-        others = [q for q in crossed.points("branch-point") if q.param != point.param]
         if others:
             ends.append(_back_to(ctx, others, ds_max, "met the branch it crossed again at its branch point",
                                  "past it the crossing branch goes on beyond the branch it crossed"))
@@ -365,21 +365,33 @@ def _back_to(ctx, others: list, reach: float, met: str, past: str, splitting=Non
     return stop
 
 
-def _back_to_the_waves(sym, name: str):
-    """For a crossing branch followed on ``G^2``: ``stop(pts)`` for :func:`~.arclength._follow`, which ends it where it passes
-    the travelling waves again.
+#: A crossing branch's orbit is a travelling wave where its symmetry breaking ``y - G(y)`` is at most this fraction
+#: of that of its first point past the switch (:func:`_back_to_the_waves`).
+ON_THE_WAVES = 1e-6
+
+
+def _back_to_the_waves(sym, name: str, others=()):
+    """For a crossing branch followed on ``G^2``: ``stop(pts)`` for :func:`~.arclength._follow`, which ends it
+    where it passes the travelling waves again.
 
     How an orbit breaks the travelling-wave symmetry is ``y - G(y)``, ``G(y) = S^s Phi(0
     -> tau)(y)`` read off its rebuilt period (no integration). Projected on its value at
     the branch's first point past the switch, it falls to zero where the crossing branch
     meets the travelling waves at another branch point, and changes sign past it, where
-    the branch goes on as its own image under ``G`` (the blades' roles moved): there it ends.
+    the branch goes on as its own image under ``G`` (the blades' roles moved): there it
+    ends, and where its newest point is a travelling wave itself (the step landed on the
+    crossed branch; the projection's sign is rounding's there). The message says where:
+    at the crossed branch's branch point in ``others`` within a step of the last two
+    points' values of the field, where there is one; else at the vertex the projections
+    give (:func:`_vertex`), unless the step landed on the waves (nothing locates the
+    meeting inside it then).
     """
     def broken(q):
         Y = q["Y"]
         return q["state"][:sym.n] - sym.turned(Y[(Y.shape[0] - 1) // (sym.fraction * sym.periods)])
 
     first = []
+    past = "past it the crossing branch goes on as its own image under the ring's turn"
 
     def stop(pts):
         if len(pts) < 3:
@@ -387,12 +399,37 @@ def _back_to_the_waves(sym, name: str):
         if not first:
             first.append(broken(pts[1]))
         e0, e1 = (float(np.dot(broken(q), first[0])) for q in pts[-2:])
-        if not (e0 > 0.0 >= e1):
+        landed = np.linalg.norm(broken(pts[-1])) <= ON_THE_WAVES * np.linalg.norm(first[0])
+        if not (landed or e0 > 0.0 >= e1):
             return None
-        at = pts[-2]["param"] + e0 / (e0 - e1) * (pts[-1]["param"] - pts[-2]["param"])
-        return (f"came back to the travelling waves near {name} = {at:.6g}, where they have another branch point "
-                f"(past it the crossing branch goes on as its own image under the ring's turn)")
+        a, b = pts[-2]["param"], pts[-1]["param"]
+        between = f"between its points at {a:.6g} and {b:.6g}"
+        reach = abs(b - a)   # the meeting lies within about a step of the two points, in the field
+        near = [q for q in others if min(a, b) - reach <= q.param <= max(a, b) + reach]
+        if near:
+            q = min(near, key=lambda q: min(abs(q.param - a), abs(q.param - b)))
+            return f"came back to the travelling waves at their branch point {name} = {q.param:.6g} ({between}; {past})"
+        if landed:
+            return (f"came back to the travelling waves {between}, where they have another branch point (its last "
+                    f"point is a travelling wave: the step landed on them; {past})")
+        return (f"came back to the travelling waves near {name} = {_vertex(a, b, e0, e1):.6g}, where they have "
+                f"another branch point ({between}; {past})")
     return stop
+
+
+def _vertex(a: float, b: float, e0: float, e1: float) -> float:
+    """Where a crossing branch meets the travelling waves, from its points at the field's values ``a`` and ``b``
+    whose symmetry breaking projects to ``e0 > 0 >= e1``.
+
+    ``G`` maps the crossing branch onto itself with the breaking reversed, so the field is
+    even in it there: the meeting is the vertex of the parabola ``lambda = v - c e^2``
+    through both points (a pitchfork's), which lies past the points where the last step
+    turned across it. Where the two breakings are of about one size (the parabola's
+    vertex ill-determined), the value interpolated linearly.
+    """
+    if abs(e0 * e0 - e1 * e1) > 1e-3 * max(e0 * e0, e1 * e1):
+        return (b * e0 * e0 - a * e1 * e1) / (e0 * e0 - e1 * e1)
+    return a + e0 / (e0 - e1) * (b - a)
 
 
 def _reduced_crossing(fam, ig, point, y, mode, scale, rel_step, periods) -> tuple:
