@@ -14,6 +14,7 @@ import numpy as np
 from .. import interrupts
 from ..orbits import (ContinuationInterrupted, FlowError, ShootingError, branch_point_branch, continuation,
                       period_doubled_branch)
+from ..orbits.branch_states import ALIKE, envelope, state_indices
 from ..orbits.cyclic import CyclicError
 from ..progress import Progress
 from . import jsonout
@@ -64,7 +65,10 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--overlay", metavar="SWEEP.nc",
                    help="draw the first harmonics of a brute-force sweep of the same field (a 'blademodel sweep' "
                         "result file) on --plot, as dots")
-    p.add_argument("--state", default=None, help="state plotted and reported (default: the first coordinate)")
+    p.add_argument("--state", default=None,
+                   help="state plotted and reported (default: the first coordinate); a pattern such as 'x*' "
+                        "(quoted) stands for the largest of the states it matches at each point, and --plot draws "
+                        "the smallest too: the envelope of a mistuned ring's blades")
     p.add_argument("--out", metavar="FILE.nc", help="write the branch (NetCDF)")
     p.add_argument("--plot", metavar="FILE.png", help="draw the branch (stable solid, unstable dashed)")
     add_jacobian_arguments(p)
@@ -93,8 +97,10 @@ def _reporter(label: str, param: str):
     return progress
 
 
-def sweep_overlay(path, field: str, state_index: int, law: str | None = None) -> tuple:
-    """``(values, first-harmonic amplitudes)`` of ``state_index`` from a sweep result file over ``field``.
+def sweep_overlay(path, field: str, states, law: str | None = None) -> tuple:
+    """``(values, first-harmonic amplitudes)`` from a sweep result file over ``field``: of the state index
+    ``states``, or the largest of those of a list of them at each point
+    (:func:`~blademodel.orbits.branch_states.envelope`).
 
     Only the finished, successful points; with several laws in the file, those of ``law``.
 
@@ -115,7 +121,7 @@ def sweep_overlay(path, field: str, state_index: int, law: str | None = None) ->
     laws = set(ds["law"].values[ok])
     if law is not None and len(laws) > 1:
         ok &= ds["law"].values == law
-    return ds[f"param_{field}"].values[ok], ds["harmonic1"].values[ok, state_index]
+    return ds[f"param_{field}"].values[ok], envelope(ds["harmonic1"].values[ok], [int(k) for k in np.atleast_1d(states)])[0]
 
 
 def _hint_cyclic(config, period: int) -> None:
@@ -221,34 +227,36 @@ def run(args: argparse.Namespace) -> int:
         branched = switch_at(branch.points("branch-point"), "bp", "branch_point", "branch from branch point",
                              "branch point", crossing)
     state = args.state or branch.state_names[0]
-    if state not in branch.state_names:
-        raise ValueError(f"--state {state!r}: not a state of the model ({', '.join(branch.state_names)})")
+    idx = state_indices(branch.state_names, state, "--state")
     if args.plot:
         from ..plots.branch import branch_figure
         overlay = None
         if args.overlay:
-            overlay = sweep_overlay(args.overlay, args.param, branch.state_names.index(state),
-                                    getattr(config, "friction", None))
+            overlay = sweep_overlay(args.overlay, args.param, idx, getattr(config, "friction", None))
         drawn = [(branch, f"period {branch.periods}")]
         drawn += [(b, f"doubled at {k}") for k, b in enumerate(doubled, 1) if b is not None]
         drawn += [(b, f"crossing at branch point {k}") for k, b in enumerate(branched, 1) if b is not None]
         branch_figure([b for b, _ in drawn], state, quantity=args.quantity, overlay=overlay,
                       labels=[label for _, label in drawn] if len(drawn) > 1 else None).savefig(args.plot, dpi=120)
-    i = branch.state_names.index(state)
+    largest, smallest, which = envelope(branch.harmonics, idx)
     rep = {"field": branch.field, "periods": branch.periods, "points": len(branch.params),
            "message": branch.message, "integrations": branch.integrations, "replays": branch.replays,
            "values": branch.params.tolist(),
-           "harmonic1": np.abs(branch.harmonics[:, i]).tolist(), "stable": branch.stable.tolist(),
+           "harmonic1": largest.tolist(), "stable": branch.stable.tolist(),
            "special": [{"kind": p.kind, "value": p.param, "multiplier": [p.multiplier.real, p.multiplier.imag],
                         "bracket": None if p.bracket is None else list(p.bracket)}
                        for p in branch.special], "state": state,
-           "doubled": [_summary(b, i) for b in doubled], "branched": [_summary(b, i) for b in branched]}
+           "doubled": [_summary(b, idx) for b in doubled], "branched": [_summary(b, idx) for b in branched]}
+    if len(idx) > 1:   # a pattern: harmonic1 is the largest of its states; which, and the smallest
+        rep["largest_state"] = [branch.state_names[k] for k in which]
+        rep["smallest1"] = smallest.tolist()
     if args.json:
         print(jsonout.dumps(rep))
         return 0
     print(f"{len(branch.params)} period-{branch.periods} orbits from {args.param} = {branch.params[0]:.6g} to "
           f"{branch.params[-1]:.6g} ({branch.message}); {int(np.sum(~branch.stable))} unstable; "
           f"{branch.integrations} integrations of the period map and {branch.replays} tangent replays")
+    print(_peak(branch, state, idx, args.param))
     for p in branch.special:
         if p.kind == "gap":
             print(f"  gap: no orbit found between {args.param} = {p.bracket[0]:.8g} and {p.bracket[1]:.8g}; the branch "
@@ -272,13 +280,32 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _summary(b, i: int) -> dict | None:
-    """A switched branch for the JSON report (None where the switch failed); ``i``: the state reported."""
+def _summary(b, idx: list) -> dict | None:
+    """A switched branch for the JSON report (None where the switch failed); ``idx``: the states reported (the
+    largest of their first harmonics at each point)."""
     if b is None:
         return None
     return {"periods": b.periods, "points": len(b.params), "message": b.message, "values": b.params.tolist(),
-            "harmonic1": np.abs(b.harmonics[:, i]).tolist(), "stable": b.stable.tolist(),
+            "harmonic1": envelope(b.harmonics, idx)[0].tolist(), "stable": b.stable.tolist(),
             "special": [{"kind": p.kind, "value": p.param} for p in b.special]}
+
+
+def _peak(branch, state: str, idx: list, param: str) -> str:
+    """The line that says where the branch's first harmonic of ``state`` (the largest of ``idx``) is largest, and
+    where it is largest on the stable orbits if not there."""
+    largest, smallest, which = envelope(branch.harmonics, idx)
+
+    def at(k):
+        whose = ""
+        if len(idx) > 1:   # which state is largest, unless they agree (a travelling wave: rounding's choice)
+            alike = largest[k] - smallest[k] <= ALIKE * largest[k]
+            whose = f" (all {len(idx)} alike)" if alike else f" ({branch.state_names[which[k]]})"
+        return f"{largest[k]:.6g}{whose} at {param} = {branch.params[k]:.8g}"
+    k = int(np.argmax(largest))
+    line = f"  largest first harmonic of {state}: {at(k)} ({'stable' if branch.stable[k] else 'unstable'})"
+    if not branch.stable[k] and branch.stable.any():
+        line += f"; on the stable orbits {at(int(np.argmax(np.where(branch.stable, largest, -np.inf))))}"
+    return line
 
 
 def _continued(path, config, run_settings: dict, label: str, param: str, follow):

@@ -15,6 +15,9 @@ def register(subparsers) -> argparse.ArgumentParser:
                                           "and print the paths of the PNG files.")
     p.add_argument("result", metavar="RESULT.nc", help="result file of 'sweep', 'reproduce' or 'continue --out'")
     p.add_argument("--out", metavar="DIR", help="directory of the figures (default: next to the result)")
+    p.add_argument("--state", default=None,
+                   help="a branch's state drawn (default: its first coordinate), or a pattern such as 'x*' "
+                        "(quoted): the largest and the smallest of the states it matches")
     p.set_defaults(run=run)
     return p
 
@@ -23,15 +26,19 @@ def run(args: argparse.Namespace) -> int:
     """Write the figures and print their paths; return the exit code."""
     from ..orbits.branch_file import is_branch_file
     from ..plots import plot_result
-    paths = plot_branch(Path(args.result), args.out) if is_branch_file(args.result) else \
+    if args.state is not None and not is_branch_file(args.result):
+        raise ValueError(f"--state {args.state!r}: only a branch file (from 'blademodel continue --out') is drawn by "
+                         f"state; {args.result} is a sweep's result")
+    paths = plot_branch(Path(args.result), args.out, args.state) if is_branch_file(args.result) else \
         plot_result(args.result, args.out)
     for path in paths:
         print(path)
     return 0
 
 
-def plot_branch(path: Path, out_dir=None) -> list[Path]:
-    """The forced response (first harmonic of the first coordinate) of a branch file: ``<stem>_branch.png``."""
+def plot_branch(path: Path, out_dir=None, state: str | None = None) -> list[Path]:
+    """The forced response (first harmonic of ``state``, a name or a pattern; default the first coordinate) of a
+    branch file: ``<stem>_branch.png``."""
     import matplotlib.pyplot as plt
 
     from ..orbits.branch_file import load_branch
@@ -39,7 +46,10 @@ def plot_branch(path: Path, out_dir=None) -> list[Path]:
     branch = load_branch(path)
     folder = Path(out_dir) if out_dir else path.parent
     folder.mkdir(parents=True, exist_ok=True)
-    fig = branch_figure(branch, branch.state_names[0])
+    from ..orbits.branch_states import state_indices
+    state = state or branch.state_names[0]
+    state_indices(branch.state_names, state, "--state")   # a bad name is named before anything is drawn
+    fig = branch_figure(branch, state)
     out = folder / f"{path.stem}_branch.png"
     fig.savefig(out, dpi=120)
     plt.close(fig)

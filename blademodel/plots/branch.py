@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import numpy as np
 from matplotlib.figure import Figure
+
+from ..orbits.branch_states import envelope, state_indices
 
 #: Marker of each kind of special point.
 MARKERS = {"fold": ("s", "fold"), "period-doubling": ("D", "period doubling"),
@@ -35,7 +36,9 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
         Several (a branch and those switched to at its period doublings) share the axes,
         each in its own colours.
     state : str
-        The state plotted.
+        The state plotted, or a pattern such as ``"x*"`` (every blade's ``x``): the largest
+        of the states it matches at each point is drawn as one state would be, the smallest
+        as a thin line (:mod:`~blademodel.orbits.branch_states`; not for ``"section"``).
     quantity : {"harmonic", "amplitude", "section"}
         First-harmonic amplitude (of the excitation frequency), half the peak-to-peak
         excursion over the orbit, or the Poincare samples ``state(k T)`` (a bifurcation
@@ -56,12 +59,21 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
     marked = set()
     if labels is not None and len(labels) != len(branches):
         raise ValueError(f"labels: one per branch ({len(branches)}), got {len(labels)}")
+    several = False
     for j, (b, (c_stable, c_unstable)) in enumerate(zip(branches, COLOURS * len(branches))):
-        i = b.state_names.index(state)
+        idx = state_indices(b.state_names, state)
+        several = len(idx) > 1
         if quantity == "section":
-            curves = [b.sections[:, k, i] for k in range(b.sections.shape[1])]
+            if several:
+                raise ValueError(f"state {state!r}: the Poincare samples are drawn for one state, and the pattern "
+                                 f"matches {len(idx)}")
+            curves = [b.sections[:, k, idx[0]] for k in range(b.sections.shape[1])]
         else:
-            curves = [np.abs(b.harmonics[:, i]) if quantity == "harmonic" else b.amplitudes[:, i]]
+            largest, smallest, _ = envelope(b.harmonics if quantity == "harmonic" else b.amplitudes, idx)
+            curves = [largest]
+            if several:   # how far the states spread: a thin line under the largest
+                ax.plot(b.params, smallest, "-", color=c_stable, lw=0.7, alpha=0.8,
+                        label=f"{labels[j] + ', ' if labels is not None else ''}smallest of {state}")
         y = curves[0]
         x = b.params
         stable = b.stable
@@ -74,6 +86,7 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
                 ax.plot(x[k:k + 2], yc[k:k + 2], "-" if both else "--", color=c_stable if both else c_unstable,
                         lw=1.6)
         tag = f"{labels[j]}, " if labels is not None else f"period {b.periods}, " if len(branches) > 1 else ""
+        tag += f"largest of {state}, " if several else ""
         ax.plot([], [], "-", color=c_stable, label=f"{tag}stable")
         ax.plot([], [], "--", color=c_unstable, label=f"{tag}unstable")
         for kind, (marker, label) in MARKERS.items():
@@ -88,7 +101,7 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
     what = {"harmonic": "first-harmonic amplitude", "amplitude": "amplitude", "section": "Poincare samples"}[quantity]
     first = branches[0]
     ax.set_xlabel(first.field)
-    ax.set_ylabel(f"{what} of {state}")
+    ax.set_ylabel(f"{what} of {state}" if not several else f"{what}, largest of {state}")
     periods = sorted({b.periods for b in branches})
     unfinished = " (unfinished: " + first.message + ")" if not first.complete else ""
     ax.set_title(f"period-{'/'.join(str(p) for p in periods)} orbits continued in {first.field}{unfinished}")
