@@ -175,6 +175,19 @@ def test_where_the_reduced_map_stalls_the_whole_map_takes_the_branch_past_it(mon
         assert _whole_map_residual(cfg, b, k) <= 1e-8
 
 
+@pytest.mark.slow
+def test_a_whole_map_that_takes_over_a_stall_and_fails_at_once_ends_with_a_message():
+    """The tuned ring's reduced branch from 1250 rad/s stalls at 1481.15 (Neimark-Sacker points crowd there); the
+    whole map, resuming with the stalled point alone and the one before it as ``prior``, fails its first step too
+    and, on an unstable orbit, looks for the stable arm of a nonsmooth fold from the last two points. That search
+    read the second-to-last of the resumed points (there was one) and raised IndexError; it takes the trail with
+    ``prior`` now, and the branch ends saying where and why (about 12 s)."""
+    cfg = load_config(MODELS / "bladed_disk_24.yaml")
+    b = continuation(cfg, "omega", 1250.0, 2500.0, cyclic=True, grazing_tol=float("inf"), max_points=1500, workers=1)
+    assert "the cyclic reduction stalled at omega = 1481.15" in b.message and b.message.startswith("the step fell")
+    assert abs(b.params[-1] - 1481.15) < 0.01 and not b.stable[-1]
+
+
 @pytest.mark.parametrize("values, field", [
     ({"mistuning_std": 0.02}, "mistuning"),
     ({"contacts": {2: {"mu": 0.3}}}, "contacts"),

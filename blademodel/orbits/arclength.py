@@ -462,7 +462,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             # even the jump failed, on an unstable arm: a turn reached from its unstable side (a
             # nonsmooth fold, where no orbit lies ahead); the stable arm that the turn leads back onto
             switched = True
-            X_new, m_new, A_new = _other_arm(ctx, pts, X, m, ds_max)
+            X_new, m_new, A_new = _other_arm(ctx, trail, X, m, ds_max)
             arm = X_new is not None
         gap = False
         if X_new is None and h / 2 < ds_min and jumped and shots and not gap_tried and len(trail) > 1:
