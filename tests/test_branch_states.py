@@ -93,6 +93,11 @@ def test_the_plot_draws_the_largest_by_stability_and_the_smallest_thin(ring_bran
     dashed = [ln.get_linestyle() == "--" for ln in segments]
     assert dashed == [not (b.stable[k] and b.stable[k + 1]) for k in range(len(segments))] and any(dashed)
     assert ax.get_ylabel() == "first-harmonic amplitude, largest of x*"
+    from blademodel.plots.branch import CROWDED
+    grazing = [ln for ln in ax.lines if ln.get_label() == "grazing"]
+    count = sum(q.kind == "grazing" for q in b.special)
+    assert len(grazing) == 1 and len(grazing[0].get_xdata()) == count
+    assert grazing[0].get_markersize() == (3 if count > CROWDED else 7)   # many: small, the curve stays visible
     with pytest.raises(ValueError, match="the Poincare samples are drawn for one state"):
         branch_figure(b, "x*", quantity="section")
 
@@ -109,7 +114,7 @@ def test_plot_draws_a_branch_file_by_a_pattern_and_names_a_bad_one(ring_branch, 
 
 def test_a_travelling_wave_s_blades_are_reported_alike_not_by_rounding_s_choice(tmp_path, capsys):
     """On a tuned ring's travelling wave every blade has the same first harmonic (to rounding): the report says so
-    rather than naming the blade that rounding made largest."""
+    rather than naming the blade that rounding made largest, and the plot draws no smallest beside the largest."""
     from blademodel.cli import main
     from blademodel.orbits.branch_file import load_branch
     out = tmp_path / "wave.nc"
@@ -121,3 +126,6 @@ def test_a_travelling_wave_s_blades_are_reported_alike_not_by_rounding_s_choice(
     h = np.abs(b.harmonics[:, [b.state_names.index(f"x{j}") for j in range(1, 5)]])
     assert np.all(h.max(axis=1) - h.min(axis=1) <= 1e-9 * h.max(axis=1))
     assert f"largest first harmonic of x*: {h.max():.6g} (all 4 alike) at omega = " in text
+    from blademodel.plots.branch import branch_figure
+    ax = branch_figure(b, "x*").axes[0]   # no second line for a smallest that is the largest
+    assert not [ln for ln in ax.lines if "smallest" in ln.get_label()]

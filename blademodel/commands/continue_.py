@@ -121,7 +121,8 @@ def sweep_overlay(path, field: str, states, law: str | None = None) -> tuple:
     laws = set(ds["law"].values[ok])
     if law is not None and len(laws) > 1:
         ok &= ds["law"].values == law
-    return ds[f"param_{field}"].values[ok], envelope(ds["harmonic1"].values[ok], [int(k) for k in np.atleast_1d(states)])[0]
+    columns = [int(k) for k in np.atleast_1d(states)]
+    return ds[f"param_{field}"].values[ok], envelope(ds["harmonic1"].values[ok], columns)[0]
 
 
 def _hint_cyclic(config, period: int) -> None:

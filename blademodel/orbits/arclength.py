@@ -39,7 +39,7 @@ bisection cannot close).
 This module drives a branch (:func:`continuation` and its step control, ``_follow``). A
 point's prediction, correction and the location of what lies between two points are in
 :mod:`.corrector`, the period maps of the field's values in :mod:`.family`, what a branch
-holds in :mod:`.branch`, and the switches to other branches in :mod:`.switching`.
+holds in :mod:`~blademodel.orbits.branch`, and the switches to other branches in :mod:`.switching`.
 """
 
 from __future__ import annotations

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import numpy as np
 from matplotlib.figure import Figure
 
-from ..orbits.branch_states import envelope, state_indices
+from ..orbits.branch_states import ALIKE, envelope, state_indices
 
 #: Marker of each kind of special point.
 MARKERS = {"fold": ("s", "fold"), "period-doubling": ("D", "period doubling"),
@@ -22,6 +23,9 @@ def _between(value, x, y, k):
     return y[k] + s * (y[k1] - y[k])
 
 
+#: Beyond this many grazing points on a branch (a mistuned ring's contacts graze one by one) their markers are small.
+CROWDED = 40
+
 #: Line colours of successive branches in one figure: (stable, unstable).
 COLOURS = [("C0", "C3"), ("C2", "C1"), ("C4", "C6"), ("C9", "C5")]
 
@@ -38,7 +42,8 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
     state : str
         The state plotted, or a pattern such as ``"x*"`` (every blade's ``x``): the largest
         of the states it matches at each point is drawn as one state would be, the smallest
-        as a thin line (:mod:`~blademodel.orbits.branch_states`; not for ``"section"``).
+        as a thin line unless they are alike throughout (a tuned ring's travelling waves)
+        (:mod:`~blademodel.orbits.branch_states`; not for ``"section"``).
     quantity : {"harmonic", "amplitude", "section"}
         First-harmonic amplitude (of the excitation frequency), half the peak-to-peak
         excursion over the orbit, or the Poincare samples ``state(k T)`` (a bifurcation
@@ -71,7 +76,7 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
         else:
             largest, smallest, _ = envelope(b.harmonics if quantity == "harmonic" else b.amplitudes, idx)
             curves = [largest]
-            if several:   # how far the states spread: a thin line under the largest
+            if several and np.any(largest - smallest > ALIKE * largest):   # how far they spread: a thin line
                 ax.plot(b.params, smallest, "-", color=c_stable, lw=0.7, alpha=0.8,
                         label=f"{labels[j] + ', ' if labels is not None else ''}smallest of {state}")
         y = curves[0]
@@ -93,7 +98,9 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
             pts = [p for p in b.special if p.kind == kind]
             if pts:
                 yy = [_between(p.param, x, y, p.index) for p in pts]
-                ax.plot([p.param for p in pts], yy, marker, color="k", ms=7, mfc="none" if kind == "grazing" else "k",
+                crowded = kind == "grazing" and len(pts) > CROWDED   # small, so that the curve stays visible
+                ax.plot([p.param for p in pts], yy, marker, color="k", ms=3 if crowded else 7,
+                        mfc="none" if kind == "grazing" else "k", mew=0.6 if crowded else 1.0,
                         label=None if kind in marked else label)
                 marked.add(kind)
     if overlay is not None:
