@@ -368,6 +368,9 @@ def test_a_branch_plot_overlaid_on_a_sweep(tmp_path, capsys):
     values, h = sweep_overlay(nc, "gamma", 0)
     assert len(values) == 4 and png.stat().st_size > 0
     assert abs(h[0] - rep["harmonic1"][0]) < 1e-6 * rep["harmonic1"][0]
+    _, h_y1 = sweep_overlay(nc, "gamma", 1)   # a pattern's overlay: the larger of its states' at each value
+    _, h_both = sweep_overlay(nc, "gamma", [0, 1])
+    assert np.array_equal(h_both, np.maximum(np.abs(h), np.abs(h_y1))) and not np.array_equal(h, h_y1)
     assert main(["continue", yaml, "--param", "F0", "--from", "50", "--to", "60", "--plot", str(png),
                  "--overlay", str(nc)]) == 2
     assert "did not vary 'F0'" in capsys.readouterr().err
