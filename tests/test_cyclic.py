@@ -175,6 +175,24 @@ def test_where_the_reduced_map_stalls_the_whole_map_takes_the_branch_past_it(mon
         assert _whole_map_residual(cfg, b, k) <= 1e-8
 
 
+def test_a_stability_change_at_a_kink_crossed_by_a_short_step_is_a_border_collision():
+    """Past its resonance the tuned ring's travelling waves change from 168 events a period to 216 (every contact
+    grazes at once) at 1481.1533 rad/s, where the steps have shrunk to about 1e-5 rad/s: the leading multipliers
+    jump from 1.40 to 0.95, the orbits from unstable to stable. The location's bracket closes to ``locate_tol``
+    before it can narrow a thousandfold, and it was reported as a Neimark-Sacker point; the modulus still jumps by
+    far more than a continuous multiplier changes over ``locate_tol``: a border collision, with its bracket."""
+    cfg = load_config(MODELS / "bladed_disk_24.yaml")
+    b = continuation(cfg, "omega", 1470.0, 1483.0, cyclic=True, grazing_tol=float("inf"), workers=1, transient=100)
+    near = [q for q in b.special if q.kind != "grazing" and abs(q.param - 1481.1533) < 1e-3]
+    assert [q.kind for q in near] == ["border-collision"] and near[0].bracket is not None
+    lo, hi = near[0].bracket
+    assert hi - lo < 1e-5
+    before, after = b.params < lo, b.params > hi
+    k0, k1 = np.nonzero(before)[0][-1], np.nonzero(after)[0][0]
+    assert not b.stable[k0] and b.stable[k1] and b.events[k0] == 168 and b.events[k1] == 216
+    assert np.max(np.abs(b.multipliers[k0])) - np.max(np.abs(b.multipliers[k1])) > 0.3
+
+
 @pytest.mark.slow
 def test_a_whole_map_that_takes_over_a_stall_and_fails_at_once_ends_with_a_message():
     """The tuned ring's reduced branch from 1250 rad/s stalls at 1481.15 (Neimark-Sacker points crowd there); the

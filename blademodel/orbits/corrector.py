@@ -94,6 +94,12 @@ TRIAL_ACCURACY = 1e-4
 JUMP_NARROWING = 1e-3
 JUMP_NARROWING_FAILED = 1e-1
 JUMP_KEPT = 0.5
+#: A stability change whose bracket closed to ``locate_tol`` before it could narrow that far (the step across it was
+#: already short: the steps shrink before a kink) is a border collision where the crossing multiplier's modulus
+#: still differs between the ends by this much. Continuous, it would change by less than about ``1e-6`` over
+#: ``locate_tol`` (the step control keeps it to ``MULTIPLIER_STEP`` a step; the tuned 24-blade ring at 1481.1533
+#: rad/s: 1.40 and 0.95 across a bracket of ``1e-8`` rad/s, reported as a Neimark-Sacker point before).
+JUMP_CLOSED = 1e-2
 
 
 class _Context:
@@ -573,7 +579,8 @@ class _Context:
         bracket's ends (else None). A border collision is found where the bracket shrank
         to ``JUMP_NARROWING`` of its first width (``JUMP_NARROWING_FAILED`` if a trial
         failed) while the modulus of the crossing multiplier (the one whose count changes)
-        still differs between its ends by ``JUMP_KEPT`` of its first difference: a
+        still differs between its ends by ``JUMP_KEPT`` of its first difference, or where
+        it closed to ``locate_tol`` with that modulus still differing by ``JUMP_CLOSED``: a
         multiplier jumps across the circle at a kink of the map (a grazing where the
         orbit's event sequence changes). There the location stops: regula falsi would
         close such a bracket only linearly, with trials ever nearer the kink, where
@@ -604,6 +611,7 @@ class _Context:
         for _ in range(100):
             width = float(np.linalg.norm(X_hi - X_lo))
             if width <= locate_tol:
+                jump = abs(c_hi - c_lo) >= JUMP_CLOSED
                 break
             if jumped(width, JUMP_NARROWING):
                 jump = True
