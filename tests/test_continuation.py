@@ -820,3 +820,25 @@ def test_a_branch_resumed_where_it_stalled_at_a_gap_goes_on_across_it(monkeypatc
     assert b.message == "reached omega = 260"
     (gap,) = b.points("gap")
     assert gap.bracket[0] == pytest.approx(stalled.params[-1]) and gap.bracket[1] >= 255.2
+
+
+def test_the_field_s_way_at_a_steep_stretch_is_the_way_its_last_points_went():
+    """``_field_way``: the secant's sign where it moves the field; where it hardly does (under 1e-3 of its length),
+    the way the last four points' values all went, and no way at all where they turned (a fold) or are too few."""
+    from types import SimpleNamespace
+
+    from blademodel.orbits import arclength as al
+    ctx = SimpleNamespace(unknowns=lambda q: q["X"])
+
+    def pts(values, state_moves):
+        return [{"param": v, "X": np.array([m, v / 100.0])} for v, m in zip(values, state_moves)]
+
+    flat = pts([1.0, 1.5, 2.0, 2.5], [0.0, 0.0, 0.0, 0.0])
+    assert al._field_way(ctx, flat, flat[-1]["X"]) == 1.0                      # the secant moves the field
+    steep = pts([1.0, 1.0001, 1.00011, 1.000111], [0.0, 1.0, 2.0, 3.0])
+    assert al._field_way(ctx, steep, steep[-1]["X"]) == 1.0                    # hardly, but steadily up
+    down = pts([1.0, 0.9999, 0.99989, 0.999889], [0.0, 1.0, 2.0, 3.0])
+    assert al._field_way(ctx, down, down[-1]["X"]) == -1.0
+    turned = pts([1.0, 1.0001, 1.00011, 1.000109], [0.0, 1.0, 2.0, 3.0])
+    assert al._field_way(ctx, turned, turned[-1]["X"]) == 0.0                  # a fold: no way
+    assert al._field_way(ctx, steep[-3:], steep[-1]["X"]) == 0.0               # too few points to tell

@@ -193,13 +193,34 @@ def test_a_stability_change_at_a_kink_crossed_by_a_short_step_is_a_border_collis
     assert np.max(np.abs(b.multipliers[k0])) - np.max(np.abs(b.multipliers[k1])) > 0.3
 
 
+def test_where_the_steps_shrink_toward_a_kink_the_shots_past_it_take_the_field_s_steady_way():
+    """Over 1480 to 2000 rad/s the tuned ring's steps shrink toward the kink at 1481.1533 rad/s until the
+    corrections fail; the secant of the last two points then moves the field by only ``5e-4`` of its length (the
+    scaled field is the range's), too little to tell its way, and the branch stalled there. The field's values had
+    risen steadily: shooting just past them finds the orbit beyond the kink, and the branch goes on, through a
+    border collision there (about 8 s)."""
+    cfg = load_config(MODELS / "bladed_disk_24.yaml")
+    b = continuation(cfg, "omega", 1480.0, 2000.0, cyclic=True, grazing_tol=float("inf"), workers=1, transient=100,
+                     max_points=60)
+    assert b.message.startswith("stopped after max_points = 60") and b.params[-1] > 1481.16
+    assert [q.kind for q in b.special if q.kind != "grazing" and q.param < b.params[-1]] == ["border-collision"]
+    assert np.all(np.diff(b.params) > 0)   # one way throughout: no turn was taken at the kink
+
+
 @pytest.mark.slow
-def test_a_whole_map_that_takes_over_a_stall_and_fails_at_once_ends_with_a_message():
-    """The tuned ring's reduced branch from 1250 rad/s stalls at 1481.15 (Neimark-Sacker points crowd there); the
-    whole map, resuming with the stalled point alone and the one before it as ``prior``, fails its first step too
-    and, on an unstable orbit, looks for the stable arm of a nonsmooth fold from the last two points. That search
-    read the second-to-last of the resumed points (there was one) and raised IndexError; it takes the trail with
-    ``prior`` now, and the branch ends saying where and why (about 12 s)."""
+def test_a_whole_map_that_takes_over_a_stall_and_fails_at_once_ends_with_a_message(monkeypatch):
+    """The tuned ring's reduced branch from 1250 rad/s stalled at 1481.15 while a secant that hardly moves the field
+    gave no way to shoot in (that rule restored here); the whole map, resuming with the stalled point alone and the
+    one before it as ``prior``, failed its first step too and, on an unstable orbit, looked for the stable arm of a
+    nonsmooth fold from the last two points. That search read the second-to-last of the resumed points (there was
+    one) and raised IndexError; it takes the trail with ``prior`` now, and the branch ends saying where and why
+    (about 12 s)."""
+    from blademodel.orbits import arclength as al
+
+    def secant_only(ctx, pts, X):
+        travel = X - ctx.unknowns(pts[-2])
+        return float(np.sign(travel[-1])) if abs(travel[-1]) > 1e-3 * np.linalg.norm(travel) else 0.0
+    monkeypatch.setattr(al, "_field_way", secant_only)
     cfg = load_config(MODELS / "bladed_disk_24.yaml")
     b = continuation(cfg, "omega", 1250.0, 2500.0, cyclic=True, grazing_tol=float("inf"), max_points=1500, workers=1)
     assert "the cyclic reduction stalled at omega = 1481.15" in b.message and b.message.startswith("the step fell")
