@@ -744,11 +744,9 @@ def test_a_branch_goes_on_across_a_stretch_with_no_orbit_and_reports_the_gap(mon
     assert not across and any(ln.get_marker() == "*" for ln in lines)   # no line drawn across the gap; it is marked
 
 
-def test_a_branch_that_turns_back_onto_itself_stops_and_says_so(monkeypatch):
-    """A wrong turn, made here by one correction (the 30th step's) returning the orbit of four steps back, with the
-    refusal of corrections onto the part passed off: the branch then retraces its points. Unchecked it ran back up
-    to the grazing at 279.806 rad/s, turned there and came down again, reporting that grazing three times; now it
-    stops within a few checks of the turn and says where it retraces what."""
+def _wrong_turn(monkeypatch, at=30):
+    """Make the ``at``-th step's correction on the bilinear pair's branch down from 280 rad/s return the orbit of
+    four steps back (a wrong turn), with the refusal of corrections onto the part passed off."""
     from blademodel.orbits import arclength as al
     correct = al._Context.correct
     seen = []
@@ -758,13 +756,41 @@ def test_a_branch_that_turns_back_onto_itself_stops_and_says_so(monkeypatch):
         if "column" not in kwargs or out[0] is None:   # only the steps' own corrections
             return out
         seen.append((out[0][:-1] * self.scale, out[0][-1] * self.span, out[1], out[2]))
-        if len(seen) == 30:
-            y, lam, m, A_old = seen[26]
+        if len(seen) == at:
+            y, lam, m, A_old = seen[at - 4]
             return np.append(y / self.scale, lam / self.span), m, A_old
         return out
 
     monkeypatch.setattr(al._Context, "correct", backwards)
     monkeypatch.setattr(al, "_passed", lambda *args: False)
+
+
+def test_a_branch_that_turned_back_onto_itself_takes_the_turn_again_at_shorter_steps(monkeypatch):
+    """The wrong turn of the test below, with the branch free to go back: it goes back to where the part it
+    retraced began, halves its longest step and goes on to the end of its range, saying so; the points after the
+    retry run down in the field as the branch does, and the grazing at 279.806 rad/s is reported once, as on the
+    branch without the wrong turn."""
+    plain = continuation(BladePair(friction="bilinear"), "omega", 280.0, 270.0, ds_max=0.02, max_points=300,
+                         workers=1)
+    _wrong_turn(monkeypatch)
+    b = continuation(BladePair(friction="bilinear"), "omega", 280.0, 270.0, ds_max=0.02, max_points=300, workers=1)
+    assert b.message.startswith("reached omega = 270 (it turned back onto itself after a wrong turn near omega = ")
+    assert b.message.endswith("and took the turn again from before it at ds_max = 0.01)")
+    assert np.all(np.diff(b.params) < 0)   # no point of the retrace is kept
+    grazing = [q.param for q in b.special if q.kind == "grazing"]
+    assert sum(abs(g - 279.806) < 1e-3 for g in grazing) == 1
+    assert [q.kind for q in b.special if q.kind != "grazing"] == [q.kind for q in plain.special
+                                                                  if q.kind != "grazing"]
+
+
+def test_a_branch_that_turns_back_onto_itself_stops_and_says_so(monkeypatch):
+    """A wrong turn, made here by one correction (the 30th step's) returning the orbit of four steps back, with the
+    refusal of corrections onto the part passed off: the branch then retraces its points. Unchecked it ran back up
+    to the grazing at 279.806 rad/s, turned there and came down again, reporting that grazing three times; with its
+    retries spent (none allowed here) it stops within a few checks of the turn and says where it retraces what."""
+    from blademodel.orbits import arclength as al
+    monkeypatch.setattr(al, "RETRACE_RETRIES", 0)
+    _wrong_turn(monkeypatch)
     b = continuation(BladePair(friction="bilinear"), "omega", 280.0, 270.0, ds_max=0.02, max_points=200, workers=1)
     assert b.message.startswith("the branch turned back onto itself")
     k = int(b.message.split("from its point ")[1].split(" ")[0])
@@ -842,3 +868,22 @@ def test_the_field_s_way_at_a_steep_stretch_is_the_way_its_last_points_went():
     turned = pts([1.0, 1.0001, 1.00011, 1.000109], [0.0, 1.0, 2.0, 3.0])
     assert al._field_way(ctx, turned, turned[-1]["X"]) == 0.0                  # a fold: no way
     assert al._field_way(ctx, steep[-3:], steep[-1]["X"]) == 0.0               # too few points to tell
+
+
+@pytest.mark.slow
+def test_a_mistuned_ring_s_wrong_turn_at_a_nonsmooth_fold_is_taken_again_and_right():
+    """A mistuned bilinear 8-blade ring (2 %, engine order 2) from 250 rad/s up: at the default longest step it
+    turned back onto itself at its nonsmooth fold at 252.8536 rad/s and stopped there; it now goes back to where
+    the retraced part began, halves the step, takes the fold and leaves the range down past 250 on the other arm
+    (about 40 s)."""
+    from pathlib import Path
+
+    from blademodel.config import apply_overrides, load_config
+    cfg = apply_overrides(load_config(Path(__file__).resolve().parent.parent / "models" / "bladed_disk_24.yaml"),
+                          {"blades": "8", "engine_order": "2", "mistuning_std": "0.02", "friction": "bilinear"})
+    b = continuation(cfg, "omega", 250.0, 340.0, grazing_tol=float("inf"), max_points=1500, workers=1,
+                     transient=100)
+    assert b.message.startswith("left [250, 340] in omega (it turned back onto itself after a wrong turn near")
+    folds = [q.param for q in b.special if q.kind == "nonsmooth-fold"]
+    assert len(folds) == 1 and abs(folds[0] - 252.8536) < 1e-3
+    assert b.params.max() < 252.854 and b.params[-1] < 250.0

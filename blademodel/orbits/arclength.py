@@ -432,6 +432,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     shots = True        # fixed-value shots allowed (not on the retry of a step whose shot led onto a side arm)
     landing = None      # where the branch stood before its last fixed-value shot, while a reversal may undo it
     overlap = SelfOverlap(ctx.n)
+    retaken = []        # (where, the shorter ds_max) of each wrong turn taken again (:func:`_before_the_turn`)
     while earlier + len(pts) < max_points:
         X_pred, A_pred = ctx.predict(pts, X, T, A, h)
         X_new, m_new, A_new = ctx.correct(X_pred, T, m, A_pred, column=ctx.column_rule(pts))
@@ -545,12 +546,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             # a regular step that runs back in the field with no fold, soon after a fixed-value shot: the
             # shot landed on a side arm that ends at a grazing, and this step crossed back onto the branch
             # (which it would retrace). Back to where the shot started, shorter, without shots
-            for q in special[landing["special"]:]:
-                if isinstance(q, PendingPoint) and q.future is not None:
-                    q.future.cancel()   # a location not yet begun in the locator's thread is not wanted
-            del pts[landing["points"]:]
-            overlap.truncate(len(pts))
-            del special[landing["special"]:]
+            _truncate(pts, special, overlap, landing["points"], landing["special"])
             X, T, A, m, h = landing["X"], landing["T"], landing["A"], landing["m"], landing["h"] / 2
             ctx.scale = landing["scale"]
             landing, shots, jumped, ahead = None, False, False, False
@@ -577,12 +573,13 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             if isinstance(q, PendingPoint):
                 q.start()
         special += found
+        new["n_special"] = len(special)
         pts.append(new)
         # each state scaled by its excursion on the newest orbit: amplitudes that grow a
         # hundredfold through a resonance do not shrink the steps a hundredfold
         taken = float(np.linalg.norm(X_new - X))
         X, T, A = ctx.rescale(_scale_of_excursions(new["magnitude"], n_q), X_new, T_new, A_new)
-        new["X"], new["A"] = X, A
+        new["X"], new["A"], new["T"], new["scale"] = X, A, T, ctx.scale.copy()   # to come back to (a retrace)
         m = m_new
         h = min(h * 1.5, ds_max) if iterations <= 4 else (h if iterations <= 8 else h / 2)
         if len(pts) > 1 and new["regular"]:
@@ -596,15 +593,68 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             break
         on_itself = overlap.verdict(pts, np.append(ctx.scale, span), taken) if new["regular"] else None
         if on_itself is not None:
-            message = _on_itself(*on_itself, name, pts, earlier)
-            break
+            again = _before_the_turn(pts, *on_itself) if len(retaken) < RETRACE_RETRIES else None
+            if again is None:
+                message = _on_itself(*on_itself, name, pts, earlier)
+                break
+            # a wrong turn at a kink: back to before it, the longest step halved for the rest of the branch
+            k, turn = again
+            retaken.append((pts[turn]["param"], ds_max / 2))
+            q = pts[k]
+            _truncate(pts, special, overlap, k + 1, q["n_special"])
+            X, T, A, m = q["X"], q["T"], q["A"], _copy(q["mode"])
+            ctx.scale = q["scale"].copy()
+            ds_max /= 2
+            h = min(h, ds_max)
+            landing, shots, jumped, ahead, switched, gap_tried = None, True, False, False, False, False
+            continue
         why = stop(pts) if stop is not None and new["regular"] else None
         if why is not None:
             message = why
             break
     else:
         message = f"stopped after max_points = {max_points} points at {name} = {X[-1] * span:.6g}"
+    for value, shorter in retaken:
+        message += (f" (it turned back onto itself after a wrong turn near {name} = {value:.6g} and took the turn "
+                    f"again from before it at ds_max = {shorter:g})")
     return message
+
+
+#: How many times a branch that turned back onto itself (a wrong turn at a kink) goes back before the turn with its
+#: longest step halved, before it stops there (:func:`_before_the_turn`).
+RETRACE_RETRIES = 2
+
+
+def _before_the_turn(pts, way: str, since: int, segment: int) -> tuple[int, int] | None:
+    """Where a branch that retraces its points (``way == "back"``: from point ``since`` on it lies on segment
+    ``segment`` of the part passed, :meth:`SelfOverlap.verdict`) takes its wrong turn again from, and about where
+    the turn was: ``(k, turn)``, point indices; or None (a branch come round, or a point that does not keep what
+    a new start needs: one of a resumed branch's).
+
+    The points after the turn retrace those before it about step for step, so the turn lies about halfway
+    between ``segment`` and ``since``. The branch goes back to ``segment``, where the part it retraced began, so
+    that the whole approach to the turn is taken again at the shorter steps: from two points before the turn the
+    mistuned bilinear 8-blade ring approached its nonsmooth fold at 252.8536 rad/s as before and turned wrong
+    again, at half and at a quarter of the step; from the retraced part's start, at half the step, it turned
+    right.
+    """
+    if way != "back":
+        return None
+    k, turn = segment, min((segment + 1 + since) // 2, len(pts) - 1)
+    if not 0 <= k < len(pts) - 1 or "T" not in pts[k] or "n_special" not in pts[k]:
+        return None
+    return k, turn
+
+
+def _truncate(pts, special, overlap, n_points: int, n_special: int) -> None:
+    """Drop the points from ``n_points`` on and the special points from ``n_special`` on (cancelling the grazing
+    locations not yet begun), as when a branch goes back to an earlier point."""
+    for q in special[n_special:]:
+        if isinstance(q, PendingPoint) and q.future is not None:
+            q.future.cancel()   # a location not yet begun in the locator's thread is not wanted
+    del pts[n_points:]
+    overlap.truncate(len(pts))
+    del special[n_special:]
 
 
 def _on_itself(way, since, segment, name, pts, earlier) -> str:
