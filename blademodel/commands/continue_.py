@@ -14,7 +14,7 @@ import numpy as np
 from .. import interrupts
 from ..orbits import (ContinuationInterrupted, FlowError, ShootingError, branch_point_branch, continuation,
                       period_doubled_branch)
-from ..orbits.branch_states import ALIKE, envelope, state_indices
+from ..orbits.branch_states import alike, envelope, state_indices
 from ..orbits.cyclic import CyclicError
 from ..progress import Progress
 from . import jsonout
@@ -239,7 +239,8 @@ def run(args: argparse.Namespace) -> int:
         drawn += [(b, f"crossing at branch point {k}") for k, b in enumerate(branched, 1) if b is not None]
         branch_figure([b for b, _ in drawn], state, quantity=args.quantity, overlay=overlay,
                       labels=[label for _, label in drawn] if len(drawn) > 1 else None).savefig(args.plot, dpi=120)
-    largest, smallest, which = envelope(branch.harmonics, idx)
+    spread = envelope(branch.harmonics, idx)
+    largest, smallest, which = spread
     rep = {"field": branch.field, "periods": branch.periods, "points": len(branch.params),
            "message": branch.message, "integrations": branch.integrations, "replays": branch.replays,
            "values": branch.params.tolist(),
@@ -257,7 +258,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"{len(branch.params)} period-{branch.periods} orbits from {args.param} = {branch.params[0]:.6g} to "
           f"{branch.params[-1]:.6g} ({branch.message}); {int(np.sum(~branch.stable))} unstable; "
           f"{branch.integrations} integrations of the period map and {branch.replays} tangent replays")
-    print(_peak(branch, state, idx, args.param))
+    print(_peak(branch, state, idx, spread, args.param))
     for p in branch.special:
         if p.kind == "gap":
             print(f"  gap: no orbit found between {args.param} = {p.bracket[0]:.8g} and {p.bracket[1]:.8g}; the branch "
@@ -291,16 +292,17 @@ def _summary(b, idx: list) -> dict | None:
             "special": [{"kind": p.kind, "value": p.param} for p in b.special]}
 
 
-def _peak(branch, state: str, idx: list, param: str) -> str:
-    """The line that says where the branch's first harmonic of ``state`` (the largest of ``idx``) is largest, and
-    where it is largest on the stable orbits if not there."""
-    largest, smallest, which = envelope(branch.harmonics, idx)
+def _peak(branch, state: str, idx: list, spread: tuple, param: str) -> str:
+    """The line that says where the branch's first harmonic of ``state`` (the largest of ``idx``; ``spread``: their
+    :func:`~blademodel.orbits.branch_states.envelope`) is largest, and where it is largest on the stable orbits if
+    not there."""
+    largest, smallest, which = spread
+    same = alike(largest, smallest)
 
     def at(k):
         whose = ""
         if len(idx) > 1:   # which state is largest, unless they agree (a travelling wave: rounding's choice)
-            alike = largest[k] - smallest[k] <= ALIKE * largest[k]
-            whose = f" (all {len(idx)} alike)" if alike else f" ({branch.state_names[which[k]]})"
+            whose = f" (all {len(idx)} alike)" if same[k] else f" ({branch.state_names[which[k]]})"
         return f"{largest[k]:.6g}{whose} at {param} = {branch.params[k]:.8g}"
     k = int(np.argmax(largest))
     line = f"  largest first harmonic of {state}: {at(k)} ({'stable' if branch.stable[k] else 'unstable'})"

@@ -579,7 +579,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         # hundredfold through a resonance do not shrink the steps a hundredfold
         taken = float(np.linalg.norm(X_new - X))
         X, T, A = ctx.rescale(_scale_of_excursions(new["magnitude"], n_q), X_new, T_new, A_new)
-        new["X"], new["A"], new["T"], new["scale"] = X, A, T, ctx.scale.copy()   # to come back to (a retrace)
+        new["X"], new["A"], new["T"] = X, A, T   # (T: to come back to, after a wrong turn)
         m = m_new
         h = min(h * 1.5, ds_max) if iterations <= 4 else (h if iterations <= 8 else h / 2)
         if len(pts) > 1 and new["regular"]:
@@ -603,7 +603,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             q = pts[k]
             _truncate(pts, special, overlap, k + 1, q["n_special"])
             X, T, A, m = q["X"], q["T"], q["A"], _copy(q["mode"])
-            ctx.scale = q["scale"].copy()
+            ctx.scale = _scale_of_excursions(q["magnitude"], n_q)   # the scaling X, T and A were rescaled to
             ds_max /= 2
             h = min(h, ds_max)
             landing, shots, jumped, ahead, switched, gap_tried = None, True, False, False, False, False

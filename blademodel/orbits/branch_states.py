@@ -58,3 +58,8 @@ def envelope(values: np.ndarray, indices: list[int]) -> tuple[np.ndarray, np.nda
     """
     a = np.abs(np.asarray(values)[:, indices])
     return a.max(axis=1), a.min(axis=1), np.asarray(indices)[np.argmax(a, axis=1)]
+
+
+def alike(largest: np.ndarray, smallest: np.ndarray) -> np.ndarray:
+    """Where the states of an :func:`envelope` are alike (to :data:`ALIKE` of the largest): at each point."""
+    return np.asarray(largest) - np.asarray(smallest) <= ALIKE * np.asarray(largest)

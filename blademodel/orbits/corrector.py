@@ -21,7 +21,7 @@ from .background import Locator, PendingPoint
 from .branch import SpecialPoint
 from .family import _Family
 from .period_map import FlowError, _copy, _key
-from .shooting import (ShootingError, _same)
+from .shooting import ShootingError, _same, _shoot
 
 
 def _turns(p, q, T_p=None) -> bool:
@@ -96,9 +96,10 @@ JUMP_NARROWING_FAILED = 1e-1
 JUMP_KEPT = 0.5
 #: A stability change whose bracket closed to ``locate_tol`` before it could narrow that far (the step across it was
 #: already short: the steps shrink before a kink) is a border collision where the crossing multiplier's modulus
-#: still differs between the ends by this much. Continuous, it would change by less than about ``1e-6`` over
-#: ``locate_tol`` (the step control keeps it to ``MULTIPLIER_STEP`` a step; the tuned 24-blade ring at 1481.1533
-#: rad/s: 1.40 and 0.95 across a bracket of ``1e-8`` rad/s, reported as a Neimark-Sacker point before).
+#: still differs between the ends by this much. A continuous one changes by about ``MULTIPLIER_STEP`` at most over
+#: a step no shorter than ``4 ds_min`` (what the step control aims at), so by about ``2.5e-4`` at most over
+#: ``locate_tol`` at the defaults (the tuned 24-blade ring at 1481.1533 rad/s: 1.40 and 0.95 across a bracket of
+#: ``6e-7`` rad/s, reported as a Neimark-Sacker point before).
 JUMP_CLOSED = 1e-2
 
 
@@ -131,7 +132,6 @@ class _Context:
         Without ``jacobian`` the point's Jacobian is not taken (None), and ``self.events``
         holds its orbit's events.
         """
-        from .shooting import _shoot
         lam = X[-1] * self.span
         try:
             P = self.fam.map_at(lam)

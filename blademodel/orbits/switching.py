@@ -20,9 +20,10 @@ import numpy as np
 from .arclength import WAVE_TOL, _check_grazing_tol, _run
 from .branch import Branch, SpecialPoint
 from .corrector import _Context, _tangent
+from .cyclic import CyclicError, CyclicSymmetry
 from .family import _Family
 from .period_map import FlowError, PeriodMap, _copy
-from .shooting import (ShootingError, _n_coordinates, _orbit_samples, _state_scale)
+from .shooting import ShootingError, _n_coordinates, _orbit_samples, _shoot, _state_scale
 
 
 def period_doubled_branch(config, name: str, point: SpecialPoint, start: float, stop: float, *,
@@ -286,7 +287,6 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
     ctx = _Context(fam, scale, hi - lo, tol, rel_step, max_corrections, grazing_tol)
 
     def off_the_old_branch(X1, m1):
-        from .shooting import _shoot
         try:
             y_old, _ = _shoot(fam.map_at(X1[-1] * ctx.span), y.copy(), _copy(mode), scale, tol, max_corrections,
                               rel_step, [])
@@ -297,12 +297,10 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
     ends = []
     others = [] if crossed is None else [q for q in crossed.points("branch-point") if q.param != point.param]
     if fam.symmetry is not None:   # followed on G^2: it ends where it comes back to the travelling waves
-        from .cyclic import CyclicSymmetry
         ends.append(_back_to_the_waves(CyclicSymmetry(fam.config_at(point.param), ig), name, others))
-    if crossed is not None:
-        if others:
-            ends.append(_back_to(ctx, others, ds_max, "met the branch it crossed again at its branch point",
-                                 "past it the crossing branch goes on beyond the branch it crossed"))
+    if others:
+        ends.append(_back_to(ctx, others, ds_max, "met the branch it crossed again at its branch point",
+                             "past it the crossing branch goes on beyond the branch it crossed"))
     b = _switched(ctx, point, y, mode, v, off_the_old_branch, "the branch it crosses", (lo, hi), ds=ds,
                   ds_min=ds_min, ds_max=ds_max, max_points=max_points, locate_tol=locate_tol, progress=progress,
                   checkpoint=checkpoint, checkpoint_every=checkpoint_every, stop=_first_end(ends))
@@ -436,7 +434,6 @@ def _reduced_crossing(fam, ig, point, y, mode, scale, rel_step, periods) -> tupl
     """For :func:`branch_point_branch` with ``cyclic``: the direction (scaled, unit) along which the crossing
     branch leaves the branch point on ``G^2``, ``fam`` reduced by that symmetry from then on; or ``(None, why)``
     where the whole map must take it (``fam`` left as it is)."""
-    from .cyclic import CyclicSymmetry
     sym = CyclicSymmetry(fam.config_at(point.param), ig) if periods == 1 else None
     lam, v, why = _reduced_direction(fam, ig, sym, y, mode, scale, rel_step, periods, -1.0, "branch point")
     if why:
@@ -459,7 +456,6 @@ def _reduced_branch_point(fam, ig, point, y, mode, scale, rel_step, periods) -> 
     """For :func:`period_doubled_branch` with ``cyclic``: the direction (scaled, unit) along which the doubled
     branch leaves the reduced map's branch point, ``fam`` reduced from then on; or ``(None, why)`` where the whole
     map must take it (``fam`` left as it is)."""
-    from .cyclic import CyclicSymmetry
     sym = CyclicSymmetry(fam.config_at(point.param), ig, periods=2) if periods == 1 else None
     lam, v, why = _reduced_direction(fam, ig, sym, y, mode, scale, rel_step, periods, 1.0, "doubling")
     if why:
@@ -476,7 +472,6 @@ def _reduced_direction(fam, ig, sym, y, mode, scale, rel_step, periods: int, tar
     bifurcation: its Jacobian's eigenvalue nearest ``target`` and that eigenvector (:func:`_critical_direction`);
     or ``(None, None, why)`` where the orbit is no travelling wave (the whole map must take it). The reduction
     follows the bifurcations (``what``) of period-1 orbits only."""
-    from .cyclic import CyclicError
     if periods != 1:
         raise CyclicError(f"the cyclic reduction follows the {what}s of period-1 orbits, not of periods = {periods}")
     G = PeriodMap(ig, 1, fam.jacobian, fam.workers, symmetry=sym)

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import numpy as np
 from matplotlib.figure import Figure
 
-from ..orbits.branch_states import ALIKE, envelope, state_indices
+from ..orbits.branch_states import alike, envelope, state_indices
 
 #: Marker of each kind of special point.
 MARKERS = {"fold": ("s", "fold"), "period-doubling": ("D", "period doubling"),
@@ -76,7 +75,7 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
         else:
             largest, smallest, _ = envelope(b.harmonics if quantity == "harmonic" else b.amplitudes, idx)
             curves = [largest]
-            if several and np.any(largest - smallest > ALIKE * largest):   # how far they spread: a thin line
+            if several and not alike(largest, smallest).all():   # how far they spread: a thin line
                 ax.plot(b.params, smallest, "-", color=c_stable, lw=0.7, alpha=0.8,
                         label=f"{labels[j] + ', ' if labels is not None else ''}smallest of {state}")
         y = curves[0]

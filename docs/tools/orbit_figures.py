@@ -282,7 +282,7 @@ def mistuned_envelope():
     rest = np.abs(2 * np.fft.rfft(X, axis=0)[1] / X.shape[0]) * 1e6
     print(f"  from rest at {w:.4f} rad/s, 400 periods: largest blade difference from the orbit "
           f"{np.max(np.abs(rest - blades)):.3g} um")
-    near = int(np.argmin(np.abs(tuned.params - w) + 1e9 * ~tuned.stable))
+    near = int(np.argmin(np.where(tuned.stable, np.abs(tuned.params - w), np.inf)))   # the nearest stable point
     level = float(np.abs(tuned.harmonics[near, xs]).max()) * 1e6
     fig = Figure(figsize=(11, 4.0))
     ax = fig.add_subplot(1, 2, 1)
