@@ -12,8 +12,14 @@ chain never leaves its cluster. Everything is stored **by contact index**
 in contact order: the envelope of row ``j`` starts at ``WC_ENV[j]``, the lowest
 sticking contact it is coupled to. Refactoring one cluster's chains leaves every
 other chain's rows as they are, and a solve restricted to a cluster touches its
-rows only (entries of an envelope that belong to another chain are exact zeros:
-``W`` has none there and no fill reaches them).
+rows only: every entry of an envelope that belongs to another chain is an exact
+zero. A refactor writes those zeros itself, for every contact in the envelope that
+does not stick or lies outside the active set. It cannot compute them instead: a
+row's envelope can span other clusters (a ring's closing contact, coupled to its
+first, spans the whole ring), whose stick flags and rows change at their own events
+while this row is not refactored; an entry left from an older factor (when the ring's
+chain reached that contact) would be read as soon as that contact sticks again, and
+the closing chain's stick forces would take a share of another cluster's.
 
 ``W_SS`` changes only at events, so it is factored there (``factor_stick``) and
 each evaluation only substitutes. If the sticking contacts close a ring, ``W_SS``
@@ -62,6 +68,7 @@ def factor_stick(cm, I, R, WI, WF):
     nc = I[H_NC]
     full, nca = active_contacts(WI, nc)  # noqa: F821
     ac, stk, env = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_STK), wvec(WI, nc, WC_ENV)  # noqa: F821
+    cmark, stamp = wvec(WI, nc, WC_MARK), WI[W_STAMP]  # noqa: F821
     claw = vec(I, I, O_CLAW, nc)  # noqa: F821
     W, Lf = vec(R, I, R_W, nc * nc), vec(WF, I, F_L, nc * nc)  # noqa: F821
     Dd, nullv = vec(WF, I, F_D, nc), vec(WF, I, F_NULL, nc)  # noqa: F821
@@ -87,7 +94,8 @@ def factor_stick(cm, I, R, WI, WF):
         env[j] = e
         r = j * nc
         for k in range(e, j):
-            if not stk[k]:
+            if not stk[k] or not (full or cmark[k] == stamp):
+                Lf[r + k] = 0.0   # another chain's contact, or none: see the module docstring
                 continue
             s = W[r + k]
             for m in range(max(e, env[k]), k):
