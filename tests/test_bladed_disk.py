@@ -226,6 +226,19 @@ def test_simulate_command_on_a_disk(tmp_path):
     assert (np.abs(data["contact_f"]) <= mu * data["contact_N"] * (1 + 1e-9) + 1e-12).all()
 
 
+def _lasting_events(log):
+    """``(contact, guard)`` of each logged event, less the pairs that undo each other in one instant (a contact
+    that leaves a mode and comes back to it at the same time)."""
+    kept = []
+    for t, c, g, frm, to in zip(log["t"], log["contact"], log["guard"], log["from"], log["to"]):
+        prev = next((k for k in range(len(kept) - 1, -1, -1) if kept[k][1] == c), None)
+        if prev is not None and kept[prev][0] == t and kept[prev][3] == to and kept[prev][4] == frm:
+            kept.pop(prev)
+            continue
+        kept.append((t, c, g, frm, to))
+    return [(c, g) for _, c, g, _, _ in kept]
+
+
 @pytest.mark.parametrize("law", ["coulomb", "bilinear"])
 def test_fourth_order_through_hundreds_of_events_on_a_mistuned_ring(law):
     """RK4 keeps its order through located events (contact, stick/slip and friction-problem ones).
@@ -233,14 +246,17 @@ def test_fourth_order_through_hundreds_of_events_on_a_mistuned_ring(law):
     The observed order approaches 4 from below as the step shrinks (3.78-3.89 between S = 500 and
     1000, >= 3.95 between 2000 and 4000): the error is ``A h^4 + B h^5`` with a sizeable second term
     at coarse steps, and that two-term model fitted to the three finer steps predicts the coarsest
-    step's error.
+    step's error. Every step takes as many events; a contact that closes where its
+    penetration's rate is zero may open and close again in the same instant at one step (normal forces
+    of 1e-20 N either side of zero: bilinear, ``S = 2000``), which changes nothing and is not counted.
     """
     cfg = _disk(blades=6, engine_order=2, friction=law, mistuning=[0.0, 0.02, -0.01, 0.03, 0.0, -0.02])
     model = cfg.build()
     ladder = (500, 1000, 2000, 4000)
     runs = {S: simulate(model, periods=6, steps_per_period=S, event_tol=1e-13, record_every=S)
             for S in (*ladder, 32000)}
-    assert len({r.counters["events"] for r in runs.values()}) == 1 and runs[500].counters["events"] > 300
+    lasting = {S: len(_lasting_events(r.events)) for S, r in runs.items()}
+    assert len(set(lasting.values())) == 1 and lasting[500] > 300
     ref = runs[32000].final_state
     err = np.array([np.max(np.abs(runs[S].final_state - ref)) / np.max(np.abs(ref)) for S in ladder])
     orders = np.log2(err[:-1] / err[1:])

@@ -200,3 +200,19 @@ def test_a_preloaded_coulomb_ring_keeps_its_symmetry_where_its_closing_contact_s
     r = simulate(model, periods=2, local_events=local, record_every=1000)
     assert r.counters["events"] > 600
     assert _three_fold_residual(r, 24) < 1e-10
+
+
+def test_a_jenkins_slider_that_stops_for_a_dip_of_its_velocity_slips_again_at_its_limit():
+    """A tuned bilinear ring of 24 blades (``gap = 2e-5`` m, ``F0 = 150`` N, 290 rad/s) from rest: at
+    ``t = 2.304 T`` three twin sliders stop for a dip of their velocity shorter than a step, and their stick guards
+    ``mu N - kd z`` start at the drift of ``z`` through the slip: ``+2e-14`` N on one, ``-9.7e-11`` N on the two
+    others. A guard that starts below zero never crossed it, so those two stuck on with ``|f|`` up to
+    ``1.27 mu N`` while the first slipped again. An elastic law's friction guard that a regular transition
+    leaves on its wrong side by such a drift is now read from the boundary (``mark_drifted``)."""
+    model = BladedDisk(blades=24, engine_order=3, friction="bilinear", gap=2e-5, F0=150.0, omega=290.0).build()
+    r = simulate(model, periods=3)
+    c = r.contacts
+    stick = c["modes"] == c["mode_names"][0].index("stick")
+    limit = r.params["mu"] * c["N"]
+    assert stick.any() and (c["modes"] > 1).any()
+    assert np.max(np.where(stick, np.abs(c["f"]) - limit, -np.inf)) <= 1e-6 * np.max(limit)
