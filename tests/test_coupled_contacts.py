@@ -30,7 +30,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import reference_coupled as rc  # noqa: E402
-from blademodel.config import apply_overrides, load_config  # noqa: E402
+from blademodel.config import BladedDisk, apply_overrides, load_config  # noqa: E402
 from blademodel.numeric import ContactIntegrator, simulate  # noqa: E402
 
 ROW = Path(__file__).resolve().parent.parent / "models" / "blade_row_3.yaml"
@@ -442,3 +442,22 @@ def test_iwan_row_friction_force_never_exceeds_mu_n():
         worst = np.max(np.abs(elements) / (p["mu"] * N[:, None] * phi))
         assert worst <= 1 + 1e-9, f"{name}: an element carried {worst:.6g} times its slip force"
         assert np.all(np.abs(f) <= p["mu"] * N * (1 + 1e-9)), name
+
+
+@pytest.mark.parametrize("blades", [3, 4])
+def test_a_ring_whose_contacts_just_touch_moves_as_one_whose_contacts_just_miss(blades):
+    """A Coulomb ring with gap 0 from rest: every contact closes with ``N = 0`` and the ring sticks, its stick
+    forces undetermined and its friction cones of zero width. The friction problem used to cycle there (a contact
+    released into a slip whose acceleration, with the rest of the ring stuck, is zero but for rounding, read as of
+    the wrong sign and sent back to stick) and the run stopped at once. Unloaded contacts have no force either way,
+    and an acceleration within rounding of the size of its terms has no sign: the ring now moves as the rings
+    with gaps of +-1e-12 m to 1e-7 of its amplitude, and their difference grows with the gap in proportion."""
+    def final(gap):
+        return simulate(BladedDisk(blades=blades, engine_order=1, friction="coulomb", gap=gap).build(),
+                        periods=5).final_state
+    ref = final(0.0)
+    size = np.max(np.abs(ref))
+    near = [np.max(np.abs(final(g) - ref)) / size for g in (1e-12, -1e-12)]
+    far = np.max(np.abs(final(1e-9) - ref)) / size
+    assert max(near) <= 1e-7
+    assert 300.0 <= far / near[0] <= 3000.0

@@ -14,6 +14,10 @@ from blademodel.numeric.contract import (WC_ALL, NONNEG, C_EVENTS, C_FRICTION_PI
 #: Relative tolerance on the sign of a slipping contact's acceleration in the friction problem.
 SLIP_SIGN_TOL = 1e-9
 
+#: A slipping contact's relative acceleration within this fraction of the size of its terms has no sign (the
+#: friction problem; ``resolve_friction``): where the rest of a ring sticks, it is zero but for rounding.
+ACC_ROUNDING = 1e-12
+
 
 def apply_transition(t, y, cm, j, gi, I, R, WI, WF, G):
     """Fire guard ``gi`` of contact ``j`` at ``(t, y)``; returns the new mode (``G``: guard scratch, not touched)."""
@@ -80,11 +84,14 @@ def resolve_friction(t, y, cm, I, R, WI, WF, counters, max_pivots):
             else:
                 s = 1.0 if m == RIGID[K, 1] else -1.0  # noqa: F821
                 a = 0.0
+                size = 0.0   # of the terms of a: their rounding is no sign
                 for k in range(4):
                     i = cidx[4 * j + k]
                     if i >= 0:
                         a += cgr[4 * j + k] * invm[i] * F[i]
-                if s * a < -SLIP_SIGN_TOL * W[j * nc + j] * b:
+                        size += abs(cgr[4 * j + k] * invm[i] * F[i])
+                tol = max(SLIP_SIGN_TOL * W[j * nc + j] * b, ACC_ROUNDING * size)
+                if b > 0.0 and s * a < -tol:   # unloaded (b = 0): no force either way
                     flip = j
                     cm[j] = RIGID[K, 0]  # noqa: F821
                     break
