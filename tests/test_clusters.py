@@ -216,3 +216,16 @@ def test_a_jenkins_slider_that_stops_for_a_dip_of_its_velocity_slips_again_at_it
     limit = r.params["mu"] * c["N"]
     assert stick.any() and (c["modes"] > 1).any()
     assert np.max(np.where(stick, np.abs(c["f"]) - limit, -np.inf)) <= 1e-6 * np.max(limit)
+
+
+def test_a_coulomb_contact_a_neighbour_s_event_pushes_past_its_limit_is_left_to_the_friction_problem():
+    """A mistuned Coulomb ring of 24 blades (engine order 1, ``F0 = 150`` N, 330 rad/s): at ``t = 2.9 T`` contact
+    10, which had just stuck (a suspect: ``mark_suspects``), reads its stick guard at ``-11`` N at a neighbour's
+    event, before the friction problem redistributes the chain's stick forces. Put on the boundary there, it kept
+    that offset after the problem left it stuck, and stuck on at up to ``1.19 mu N``. The friction problem
+    settles a rigid contact's guards; suspects are now put on the boundary only where it does not."""
+    model = BladedDisk(blades=24, engine_order=1, friction="coulomb", F0=150.0, omega=330.0, mistuning_std=0.02,
+                       mistuning_seed=3).build()
+    r = simulate(model, periods=3)
+    assert r.counters["friction_pivots"] > 0
+    assert r.counters["max_cone_ratio"] <= 1.0 + 1e-9
