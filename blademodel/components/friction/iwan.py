@@ -101,8 +101,10 @@ class Iwan(FrictionLaw):
         sticks, ``s_i = 0``, with its stretch set to its slip force exactly
         (``kd_i z_i = s_i mu N phi_i``, which the slip phase holds only to the
         integration error: a stretch a rounding error past it would start the
-        shared stick guard below zero, where it is never seen to cross); every
-        other element keeps its mode.
+        shared stick guard below zero, where it is never seen to cross; even set
+        so, the guard can start an ulp below zero, and the per-contact kernel
+        reads such a guard from the boundary, ``contact_guards.mark_drifted``);
+        every other element keeps its mode.
     Why shared guards
         The solver fires one guard per event and evaluates the guards afresh
         after it, so a guard that crossed zero in the same instant as the one that
