@@ -88,8 +88,9 @@ def resolve_friction(t, y, cm, I, R, WI, WF, counters, max_pivots):
                 for k in range(4):
                     i = cidx[4 * j + k]
                     if i >= 0:
-                        a += cgr[4 * j + k] * invm[i] * F[i]
-                        size += abs(cgr[4 * j + k] * invm[i] * F[i])
+                        term = cgr[4 * j + k] * invm[i] * F[i]
+                        a += term
+                        size += abs(term)
                 tol = max(SLIP_SIGN_TOL * W[j * nc + j] * b, ACC_ROUNDING * size)
                 if b > 0.0 and s * a < -tol:   # unloaded (b = 0): no force either way
                     flip = j

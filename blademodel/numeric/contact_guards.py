@@ -176,11 +176,11 @@ def mark_near(j, cm, I, WI, WF, G):
         G[j, gi] = g - off
 
 
-def mark_drifted(j, cm, I, WI, WF, G):
-    """After a regular friction transition of contact ``j`` of an elastic law (no rigid stick; closed before and
-    after: a contact that closes enters through its law's entry rule, and one that opens has no friction): if
-    a friction guard of its new mode (``gi >= 1``; 0 is the normal guard) lies on its wrong side in ``G[j]``,
-    read its guards from the boundary (``mark_near``).
+def mark_drifted(j, old, cm, I, WI, WF, G):
+    """After a regular transition of contact ``j`` from mode ``old``: where it is a friction transition of an
+    elastic law (no rigid stick; closed before and after: a contact that closes enters through its law's entry
+    rule, and one that opens has no friction) and a friction guard of its new mode (``gi >= 1``; 0 is the normal
+    guard) lies on its wrong side in ``G[j]``, read its guards from the boundary (``mark_near``).
 
     An elastic law's force is continuous at its transitions, so its new friction guards
     start on their boundary: a Jenkins slip ends where the slider stops with its spring at
@@ -202,6 +202,8 @@ def mark_drifted(j, cm, I, WI, WF, G):
     """
     K = I[I[O_CLAW] + j]
     m = cm[j]
+    if old == 0 or m == 0 or RIGID[K, 0] >= 0:  # noqa: F821
+        return
     scale = 0.0
     for gi in range(1, NG[K, m]):  # noqa: F821
         scale = max(scale, abs(G[j, gi]))

@@ -84,7 +84,7 @@ import math  # noqa: F401
 from blademodel.numeric.contract import (C_CLUSTERS, C_RESTARTS, C_EVENTS, C_GRAZING, C_LOGGED, C_RECORDS, C_RHS, C_STEPS, F_ACC, F_FR,
                                          F_TLAST, F_N, H_N, H_NC, H_NLAW, S_MAX_CONE_RATIO, SC_Y0, STATUS_EVENT_STORM,
                                          STATUS_FRICTION_UNRESOLVED, STATUS_NONFINITE, STATUS_OK, W_NB, W_NEV,
-                                         O_CLAW, W_NS, W_STAMP, WC_CM0, WC_CMSTEP, WC_FIRED, WC_SEED)
+                                         W_NS, W_STAMP, WC_CM0, WC_CMSTEP, WC_FIRED, WC_SEED)
 
 
 def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_events, max_pivots, detect_grazing,
@@ -175,8 +175,8 @@ def process_cluster(t, t_end, y, cm, I, R, WI, WF, SC, GS, reuse, tol_t, max_eve
             eval_guards(t, y, cm, I, R, WI, WF, G1)  # noqa: F821
             if is_near:
                 mark_near(j, cm, I, WI, WF, G1)  # noqa: F821
-            elif old != 0 and cm[j] != 0 and RIGID[I[I[O_CLAW] + j], 0] < 0:  # noqa: F821
-                mark_drifted(j, cm, I, WI, WF, G1)  # noqa: F821
+            else:
+                mark_drifted(j, old, cm, I, WI, WF, G1)  # noqa: F821
             code = first_crossing(cm, I, WI, Gs, G1)  # noqa: F821
             is_near = False
             if code < 0:

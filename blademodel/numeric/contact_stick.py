@@ -42,12 +42,15 @@ from blademodel.numeric.contract import (WD_ALL, WC_ALL, NONNEG, F_B, F_CG, F_D,
 NULL_PIVOT = 1e-10
 
 
+def in_active_set(j, I, WI):
+    """Whether contact ``j`` belongs to the active set (the whole model, or the cluster of the last stamp)."""
+    return WI[W_FULL] != 0 or wvec(WI, I[H_NC], WC_MARK)[j] == WI[W_STAMP]  # noqa: F821
+
+
 def null_pivot_active(I, WI):
     """Whether the stick factor's zero pivot (a closed ring that sticks) lies in the active set."""
     z = WI[W_NULL]
-    if z < 0:
-        return False
-    return WI[W_FULL] != 0 or wvec(WI, I[H_NC], WC_MARK)[z] == WI[W_STAMP]  # noqa: F821
+    return z >= 0 and in_active_set(z, I, WI)
 
 
 def stick_rates_known(I, WI):
@@ -68,7 +71,6 @@ def factor_stick(cm, I, R, WI, WF):
     nc = I[H_NC]
     full, nca = active_contacts(WI, nc)  # noqa: F821
     ac, stk, env = wvec(WI, nc, WC_ALL if full else WC_AC), wvec(WI, nc, WC_STK), wvec(WI, nc, WC_ENV)  # noqa: F821
-    cmark, stamp = wvec(WI, nc, WC_MARK), WI[W_STAMP]  # noqa: F821
     claw = vec(I, I, O_CLAW, nc)  # noqa: F821
     W, Lf = vec(R, I, R_W, nc * nc), vec(WF, I, F_L, nc * nc)  # noqa: F821
     Dd, nullv = vec(WF, I, F_D, nc), vec(WF, I, F_NULL, nc)  # noqa: F821
@@ -94,7 +96,7 @@ def factor_stick(cm, I, R, WI, WF):
         env[j] = e
         r = j * nc
         for k in range(e, j):
-            if not stk[k] or not (full or cmark[k] == stamp):
+            if not stk[k] or not in_active_set(k, I, WI):
                 Lf[r + k] = 0.0   # another chain's contact, or none: see the module docstring
                 continue
             s = W[r + k]

@@ -13,10 +13,11 @@ kernel. Checked:
   ``N / g`` apart are driven in phase, so the state turned by ``N / g`` blades is the state
   itself (to ``1e-8`` of its largest entry).
 
-A line per draw; ``<<<`` marks a failed check, ``ERR`` a run that stopped. (The survey that
-found the faults described in ``docs/solver.md``: the stale stick factor of a ring's closing
-contact, a Jenkins slider stuck past its limit, the friction problem cycling at ``gap = 0``, a
-Coulomb suspect marked before the friction problem.)
+A line per draw; ``<<<`` marks a failed check, ``ERR`` a run that stopped. (Before the fixes
+described in ``docs/solver.md``, these checks met a Jenkins or Iwan slider stuck past its
+limit, the friction problem cycling at ``gap = 0`` and a Coulomb suspect marked before the
+friction problem; the stale stick factor of a ring's closing contact showed as a tuned
+ring's broken symmetry.)
 """
 
 from __future__ import annotations
@@ -24,12 +25,12 @@ from __future__ import annotations
 import argparse
 import itertools
 import math
-import re
 
 import numpy as np
 
 from blademodel.config import BladedDisk
 from blademodel.numeric import simulate
+from blademodel.orbits.cyclic import _turned
 
 GRID = list(itertools.product(["coulomb", "bilinear", "iwan"], [6, 8, 24], [1, 2, 3, 4], [-1e-5, 0.0, 2e-5, 4e-5],
                               [60.0, 150.0], [250.0, 290.0, 330.0], [0.0, 0.02]))
@@ -38,22 +39,20 @@ LIMIT_TOL, SYMMETRY_TOL = 1e-6, 1e-8
 
 def turned_residual(r, blades: int, shift: int) -> float:
     """Largest difference between the final state and the state turned by ``shift`` blades, over its largest."""
-    names = r.state_names
-
-    def turned(name):
-        m = re.match(r"(.*?)(\d+)$", name)
-        return f"{m.group(1)}{(int(m.group(2)) - 1 + shift) % blades + 1}" if m else name
-
+    index = _turned(list(r.state_names), blades, shift)   # the slot each state moves to
     y = r.final_state
-    perm = [names.index(turned(nm)) for nm in names]
-    return float(np.max(np.abs(y[perm] - y)) / np.max(np.abs(y)))
+    turned = np.empty_like(y)
+    turned[index] = y
+    return float(np.max(np.abs(turned - y)) / np.max(np.abs(y)))
 
 
-def over_the_limit(r) -> float:
-    """The largest ``|f| - mu N`` of a closed contact at a step's end, over the largest ``mu N``."""
+def over_the_limit(r, mode: str | None = None) -> float:
+    """The largest ``|f| - mu N`` of a closed contact (or of one in ``mode``, e.g. ``"stick"``) at a step's end,
+    over the largest ``mu N``."""
     c = r.contacts
     limit = r.params["mu"] * c["N"]
-    over = np.where(c["modes"] != 0, np.abs(c["f"]) - limit, -np.inf)
+    which = c["modes"] != 0 if mode is None else c["modes"] == c["mode_names"][0].index(mode)
+    over = np.where(which, np.abs(c["f"]) - limit, -np.inf)
     return float(np.max(over) / max(np.max(limit), 1e-300))
 
 
