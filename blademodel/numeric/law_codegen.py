@@ -22,9 +22,10 @@ open and ``open`` when closed, the law's guards follow from 1):
 ``lawK_guard_rates(mode, N, Nd, Ndd, v, vd, f, fd, y, so, R, I, j, a, D)``
     Time derivatives of the law guards into ``D[j, 1 + i]`` (``Ndd``, ``vd``, ``fd``:
     the rates of ``Nd``, ``v`` and of a rigid stick force; ``a``: ``dy/dt``, whose
-    law-state rates sit at ``a[so + i]``). Not written (NaN) where a guard is not
-    smooth (``Abs``, ``Min``, ...); NaN through ``fd`` where the stick force's rate is
-    not known.
+    law-state rates sit at ``a[so + i]``). ``Piecewise``, ``Min`` and ``Max`` have
+    their chosen branch's rate (``rate_expr``); not written (NaN) where a guard uses
+    ``Abs``, ``sign`` or ``Heaviside``; NaN through ``fd`` where the stick force's rate
+    is not known.
 ``lawK_force_rate(mode, N, Nd, Ndd, v, vd, y, so, R, I, j, a)``
     Rate of an explicit-force mode's friction force (0 open or in rigid stick; NaN
     if not smooth).
@@ -129,22 +130,42 @@ def _check_rigid(law: FrictionLaw, ctx: ContactContext, name: str):
                          f"got {fp} and {fm}")
 
 
-#: Functions whose derivative is not a smooth expression: a guard using one gets no rate.
-_NONSMOOTH = (sp.Abs, sp.Min, sp.Max, sp.Piecewise, sp.sign, sp.Heaviside)
+#: Functions whose derivative is not an expression of the state: a guard using one gets no rate.
+_NONSMOOTH = (sp.Abs, sp.sign, sp.Heaviside)
+
+
+def _nested_choice(e):
+    """``Min`` / ``Max`` as nested two-way ``Piecewise`` (the first argument against the choice among the rest),
+    whose derivative is the chosen argument's: linear in the number of arguments once shared sub-expressions are
+    taken out (SymPy's own rewrite compares every pair)."""
+    args = list(e.args)
+    better = (lambda a, b: a <= b) if isinstance(e, sp.Min) else (lambda a, b: a >= b)
+    rest = args[-1]
+    for a in reversed(args[:-1]):
+        rest = sp.Piecewise((a, better(a, rest)), (rest, True))
+    return rest
 
 
 def rate_expr(g, ctx: ContactContext, force, Ndd, vd, fd, zd):
-    """``dg/dt`` of an expression of a contact's ``N, Nd, v, f`` and law states, or None if not smooth.
+    """``dg/dt`` of an expression of a contact's ``N, Nd, v, f`` and law states, or None if it has no rate.
 
     ``force`` is the mode's explicit friction force, substituted for ``f``; None in a
     rigid stick mode, whose force is the stick solution with rate ``fd``. ``Ndd``,
     ``vd`` and ``zd`` (per law state) are the rates of ``Nd``, ``v`` and the states.
+
+    A ``Piecewise`` guard (one branch per discrete state, as an Iwan element's stick or
+    slip) has its branch's rate, a ``Min`` or ``Max`` the rate of the argument it
+    takes (the one-sided rate at the instant, the first argument's where two are
+    equal): a guard shared by several elements moves as its critical element does, and
+    the grazing check needs that rate to see the element's guard dip through zero and
+    come back inside a step. ``Abs``, ``sign`` and ``Heaviside`` give no rate.
     """
     g = sp.sympify(g)
     if force is not None:
         g = g.xreplace({ctx.f: force})
     if any(g.has(fn) for fn in _NONSMOOTH):
         return None
+    g = g.replace(lambda e: isinstance(e, (sp.Min, sp.Max)), _nested_choice)
     chain = [(ctx.N, ctx.Ndot), (ctx.Ndot, Ndd), (ctx.v, vd), (ctx.f, fd)] + list(zip(ctx.states.values(), zd))
     return sp.Add(*[sp.diff(g, s) * rate for s, rate in chain])
 
