@@ -9,7 +9,7 @@ import pytest
 from numpy.testing import assert_array_equal
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "tools"))
-from ring_invariants import over_the_limit, turned_residual  # noqa: E402
+from ring_invariants import over_the_limit, slip_against, turned_residual  # noqa: E402
 
 from blademodel.components import Contact, HarmonicForce, Mass, Spring
 from blademodel.config import BladedDisk
@@ -251,3 +251,16 @@ def test_iwan_elements_that_slip_as_their_contact_closes_keep_a_tuned_ring_symme
     r = simulate(model, periods=2, local_events=local, record_every=1000)
     assert r.counters["grazing_events"] > 0
     assert turned_residual(r, 24, 12) < 1e-10
+
+
+def test_a_contact_released_by_the_friction_problem_after_its_own_event_slips_along_its_velocity():
+    """A tuned, preloaded Coulomb ring of 6 blades at engine order 3 (``F0 = 60`` N, 290 rad/s): at ``t = 2.8537 T``
+    contact 2's slip ends, its guard sends it to stick and the friction problem releases it into the opposite
+    slip, at a velocity a rounding error past zero on the side its new mode forbids (``-6e-18`` m/s). Its guard then
+    never crossed: it slipped on in ``slip+`` while its velocity fell to ``-1.4e-4`` m/s (``6.5e-3`` of the largest),
+    friction feeding the motion. A contact the problem moves is read from the boundary whether or not its own
+    guard fired in the event (``settle_event``)."""
+    model = BladedDisk(blades=6, engine_order=3, friction="coulomb", gap=-1e-5, F0=60.0, omega=290.0).build()
+    r = simulate(model, periods=3)
+    assert r.counters["friction_pivots"] > 0
+    assert slip_against(model, r) <= 1e-12

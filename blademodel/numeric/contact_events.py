@@ -150,11 +150,15 @@ def settle_event(t, y, cm, I, R, WI, WF, G, counters, max_pivots, log_t, log_c, 
                  recording):
     """After guard transitions: the friction problem of the active rigid contacts, logged; False if unresolved.
 
-    A contact the problem moves to a new mode (a stuck one released into a slip) enters
-    it with its new guards where the motion puts them: a slip velocity of zero, to a
-    rounding error. One left a rounding error on its wrong side would never change sign,
-    and the contact would slip on against its friction's direction (measured on a tuned
-    Coulomb ring: ``-7e-3`` m/s in ``slip+`` six steps on, the period map jumping there),
+    A contact the problem moves to a new mode (a stuck one released into a slip, whether
+    it had been stuck or its own guard had just sent it to stick) enters it with its new
+    guards where the motion puts them: a slip velocity of zero, to a rounding error. One
+    left a rounding error on its wrong side would never change sign, and the contact
+    would slip on against its friction's direction (measured on a tuned Coulomb ring:
+    ``-7e-3`` m/s in ``slip+`` six steps on, the period map jumping there; on a tuned
+    preloaded 6-blade ring at engine order 3, a contact whose slip ended, sent to stick
+    by its guard and released by the problem into the opposite slip, up to ``1.4e-4``
+    m/s, ``6.5e-3`` of the largest velocity, before this applied to such a contact too),
     so such a contact is marked as one fired early (``mark_near``): its guards read from
     the boundary. Only a rounding error, ``RELEASE_ROUNDING`` of the largest velocity of
     the state: a stuck contact whose velocity a perturbation moved (the difference
@@ -166,7 +170,7 @@ def settle_event(t, y, cm, I, R, WI, WF, G, counters, max_pivots, log_t, log_c, 
     ac = wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
     cm0, before, fired = wvec(WI, nc, WC_CM0), wvec(WI, nc, WC_BEFORE), wvec(WI, nc, WC_FIRED)  # noqa: F821
     ok = True
-    moved = False   # a contact the friction problem alone moved (its ``before`` then -1)
+    moved = False   # a contact the friction problem moved (its ``before`` then -1)
     if rigid_problem(cm, I, WI):
         for jj in range(nca):
             j = ac[jj] & NONNEG
@@ -186,8 +190,8 @@ def settle_event(t, y, cm, I, R, WI, WF, G, counters, max_pivots, log_t, log_c, 
             else:
                 log_event(t, j, runtime(-1), before[j], cm[j], log_t, log_c, log_g, log_from, log_to,  # noqa: F821
                           counters, recording, fired)
-                before[j] = -1
-                moved = True
+            before[j] = -1
+            moved = True
     factor_stick(cm, I, R, WI, WF)  # noqa: F821
     if moved:
         eval_guards(t, y, cm, I, R, WI, WF, G)  # noqa: F821
