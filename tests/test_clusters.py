@@ -264,3 +264,19 @@ def test_a_contact_released_by_the_friction_problem_after_its_own_event_slips_al
     r = simulate(model, periods=3)
     assert r.counters["friction_pivots"] > 0
     assert slip_against(model, r) <= 1e-12
+
+
+def test_a_slip_held_at_zero_velocity_by_the_ring_keeps_its_direction_through_a_neighbour_s_stick():
+    """A tuned, preloaded Coulomb ring of 8 blades at engine order 4 (``F0 = 60`` N, 290 rad/s): adjacent blades are
+    driven in antiphase, and while every other contact sticks the ring's closure holds the others' slip velocities
+    at zero (their sum is zero and they are alike). At ``t = 1.35391 T`` contacts 1 and 3 stick; the friction
+    problem projects the velocities onto their constraints, and contact 5, slipping on in ``slip+`` at ``+9e-19``
+    m/s, is left at ``-9e-19``. Its guard then never crossed: 0.02 T later it slipped in ``slip+`` at ``-4e-5`` m/s
+    (``1.7e-3`` of the largest velocity) and the ring's symmetry broke by ``6e-4``. Every rigid slip of the
+    problem's set is now read from the boundary where it lies a rounding error on its wrong side
+    (``settle_event``)."""
+    model = BladedDisk(blades=8, engine_order=4, friction="coulomb", gap=-1e-5, F0=60.0, omega=290.0).build()
+    r = simulate(model, periods=2)
+    assert r.counters["friction_pivots"] > 0
+    assert slip_against(model, r) <= 1e-12
+    assert turned_residual(r, 8, 2) < 1e-10

@@ -1,13 +1,12 @@
 """Rings drawn at random keep what their physics guarantees (``docs/tools/ring_invariants.py``, the survey that
-found four faults of the per-contact kernel: ``docs/solver.md``).
+found faults of the per-contact kernel: ``docs/solver.md``).
 
 Every closed contact's friction force stays within ``mu N`` at every step's end, whatever the law, ring, gap or
 mistuning, and every slipping Coulomb contact slips along its velocity; a tuned ring whose engine order and blade
 count share a factor ``g > 1`` keeps its turn by ``N / g`` blades. The symmetry is asked of the Coulomb and
 bilinear rings: of the 1728 rings of the whole grid, one tuned Iwan ring breaks it by ``8e-8`` (the elements of
-twin contacts that close with a slip force of nearly zero, decided at the accuracy the closing is located to:
-``event_tol = 1e-12`` keeps it), and two tuned preloaded Coulomb rings at engine order ``N / 2`` break it and
-slip against their velocity (``docs/solver.md``, *Tuned rings at engine order N / 2*).
+twin contacts that close with a slip force of nearly zero decide at the accuracy the closing is located to:
+``event_tol = 1e-12`` keeps it; ``docs/solver.md``).
 """
 
 import math

@@ -152,25 +152,29 @@ def settle_event(t, y, cm, I, R, WI, WF, G, counters, max_pivots, log_t, log_c, 
 
     A contact the problem moves to a new mode (a stuck one released into a slip, whether
     it had been stuck or its own guard had just sent it to stick) enters it with its new
-    guards where the motion puts them: a slip velocity of zero, to a rounding error. One
-    left a rounding error on its wrong side would never change sign, and the contact
-    would slip on against its friction's direction (measured on a tuned Coulomb ring:
-    ``-7e-3`` m/s in ``slip+`` six steps on, the period map jumping there; on a tuned
-    preloaded 6-blade ring at engine order 3, a contact whose slip ended, sent to stick
-    by its guard and released by the problem into the opposite slip, up to ``1.4e-4``
-    m/s, ``6.5e-3`` of the largest velocity, before this applied to such a contact too),
-    so such a contact is marked as one fired early (``mark_near``): its guards read from
-    the boundary. Only a rounding error, ``RELEASE_ROUNDING`` of the largest velocity of
-    the state: a stuck contact whose velocity a perturbation moved (the difference
-    quotients of a period map do) keeps its guards as they are, and the map stays
-    differentiable as the tangent has it. ``G`` is guard scratch.
+    guards where the motion puts them: a slip velocity of zero, to a rounding error. A
+    rigid contact that slips on through the problem is moved too: the velocities are
+    projected onto the stick constraints of the contacts that newly stick, and a slip
+    held at a velocity of zero (in a tuned ring at engine order ``N / 2`` the ring's
+    closure holds every other contact there while the rest stick) moves by a rounding
+    error with them. One left a rounding error on its wrong side would never change sign,
+    and the contact would slip on against its friction's direction (measured on a tuned
+    Coulomb ring: ``-7e-3`` m/s in ``slip+`` six steps on, the period map jumping there; on
+    tuned preloaded rings of 6 and 8 blades at engine order ``N / 2``, ``1.4e-4`` m/s, up
+    to ``6.5e-3`` of the largest velocity, where this applied only to the contacts the
+    problem released and not also to those its own guard had sent to stick first, or to
+    those slipping on), so such a contact is marked as one fired early (``mark_near``):
+    its guards read from the boundary. Only a rounding error, ``RELEASE_ROUNDING`` of the
+    largest velocity of the state: a contact whose velocity a perturbation moved (the
+    difference quotients of a period map do) keeps its guards as they are, and the map
+    stays differentiable as the tangent has it. ``G`` is guard scratch.
     """
     nc = I[H_NC]
     full, nca = active_contacts(WI, nc)  # noqa: F821
     ac = wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
     cm0, before, fired = wvec(WI, nc, WC_CM0), wvec(WI, nc, WC_BEFORE), wvec(WI, nc, WC_FIRED)  # noqa: F821
     ok = True
-    moved = False   # a contact the friction problem moved (its ``before`` then -1)
+    moved = False   # a contact the friction problem moved or left slipping (its ``before`` then -1)
     if rigid_problem(cm, I, WI):
         for jj in range(nca):
             j = ac[jj] & NONNEG
@@ -192,6 +196,12 @@ def settle_event(t, y, cm, I, R, WI, WF, G, counters, max_pivots, log_t, log_c, 
                           counters, recording, fired)
             before[j] = -1
             moved = True
+        for jj in range(nca):   # the rigid slips the projection may have moved
+            j = ac[jj] & NONNEG
+            K = I[I[O_CLAW] + j]
+            if RIGID[K, 0] >= 0 and cm[j] != 0 and not IS_STICK[K, cm[j]]:  # noqa: F821
+                before[j] = -1
+                moved = True
     factor_stick(cm, I, R, WI, WF)  # noqa: F821
     if moved:
         eval_guards(t, y, cm, I, R, WI, WF, G)  # noqa: F821

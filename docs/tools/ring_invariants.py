@@ -20,9 +20,10 @@ described in ``docs/solver.md``, these checks met a Jenkins or Iwan slider stuck
 limit, the friction problem cycling at ``gap = 0`` and a Coulomb suspect marked before the
 friction problem; the stale stick factor of a ring's closing contact, and an Iwan element's
 unseen dip through its limit (its shared guard had no rate), showed as a tuned ring's broken
-symmetry; a contact the friction problem released after its own event, left on the wrong
-side of its slip guard, as a slip against its velocity. Three of the 1728 rings of the grid
-still fail, ``docs/solver.md`` says which and why.)
+symmetry; rigid slips the friction problem left a rounding error on the wrong side of their
+guards (released after their own event, or slipping on through a projection), as slips
+against their velocity. One of the 1728 rings of the grid still fails, ``docs/solver.md``
+says which and why.)
 """
 
 from __future__ import annotations
