@@ -272,9 +272,8 @@ def test_a_slip_held_at_zero_velocity_by_the_ring_keeps_its_direction_through_a_
     at zero (their sum is zero and they are alike). At ``t = 1.35391 T`` contacts 1 and 3 stick; the friction
     problem projects the velocities onto their constraints, and contact 5, slipping on in ``slip+`` at ``+9e-19``
     m/s, is left at ``-9e-19``. Its guard then never crossed: 0.02 T later it slipped in ``slip+`` at ``-4e-5`` m/s
-    (``1.7e-3`` of the largest velocity) and the ring's symmetry broke by ``6e-4``. Every rigid slip of the
-    problem's set is now read from the boundary where it lies a rounding error on its wrong side
-    (``settle_event``)."""
+    (``1.7e-3`` of the largest velocity) and the ring's symmetry broke by ``6e-4``. A rigid slip whose velocity the
+    problem's projection takes across zero is now read from the boundary (``settle_event``)."""
     model = BladedDisk(blades=8, engine_order=4, friction="coulomb", gap=-1e-5, F0=60.0, omega=290.0).build()
     r = simulate(model, periods=2)
     assert r.counters["friction_pivots"] > 0

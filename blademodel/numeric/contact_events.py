@@ -146,35 +146,50 @@ def log_event(t, j, gi, old, new, log_t, log_c, log_g, log_from, log_to, counter
 RELEASE_ROUNDING = 1e-10
 
 
+def projected_across(j, cm, y, I, R, WF):
+    """Whether contact ``j``, slipping on through the friction problem in a rigid law's slip, had its velocity
+    taken across zero, against its slip, by the problem's projection (from the state at the event ``yev``)."""
+    K = I[I[O_CLAW] + j]
+    m = cm[j]
+    if RIGID[K, 0] < 0 or (m != RIGID[K, 1] and m != RIGID[K, 2]):  # noqa: F821
+        return False
+    n, nc = I[H_N], I[H_NC]
+    cidx, cgr, yev = vec(I, I, O_CIDX, 4 * nc), vec(R, I, R_GR, 4 * nc), vec(WF, I, F_YEV, y.shape[0])  # noqa: F821
+    s = 1.0 if m == RIGID[K, 1] else -1.0  # noqa: F821
+    return s * slot_sum(j, cidx, cgr, yev, n) >= 0.0 and s * slot_sum(j, cidx, cgr, y, n) < 0.0  # noqa: F821
+
+
 def settle_event(t, y, cm, I, R, WI, WF, G, counters, max_pivots, log_t, log_c, log_g, log_from, log_to,
                  recording):
     """After guard transitions: the friction problem of the active rigid contacts, logged; False if unresolved.
 
     A contact the problem moves to a new mode (a stuck one released into a slip, whether
     it had been stuck or its own guard had just sent it to stick) enters it with its new
-    guards where the motion puts them: a slip velocity of zero, to a rounding error. A
-    rigid contact that slips on through the problem is moved too: the velocities are
-    projected onto the stick constraints of the contacts that newly stick, and a slip
-    held at a velocity of zero (in a tuned ring at engine order ``N / 2`` the ring's
-    closure holds every other contact there while the rest stick) moves by a rounding
-    error with them. One left a rounding error on its wrong side would never change sign,
-    and the contact would slip on against its friction's direction (measured on a tuned
-    Coulomb ring: ``-7e-3`` m/s in ``slip+`` six steps on, the period map jumping there; on
-    tuned preloaded rings of 6 and 8 blades at engine order ``N / 2``, ``1.4e-4`` m/s, up
-    to ``6.5e-3`` of the largest velocity, where this applied only to the contacts the
-    problem released and not also to those its own guard had sent to stick first, or to
-    those slipping on), so such a contact is marked as one fired early (``mark_near``):
-    its guards read from the boundary. Only a rounding error, ``RELEASE_ROUNDING`` of the
-    largest velocity of the state: a contact whose velocity a perturbation moved (the
-    difference quotients of a period map do) keeps its guards as they are, and the map
-    stays differentiable as the tangent has it. ``G`` is guard scratch.
+    guards where the motion puts them: a slip velocity of zero, to a rounding error. So
+    does a rigid contact that slips on through the problem when the problem's projection
+    (onto the constraints of the contacts that newly stick) takes its velocity across zero
+    (``projected_across``): in a tuned ring at engine order ``N / 2`` the ring's closure
+    holds every other contact's slip at a velocity of zero while the rest stick, and the
+    projection moves it by a rounding error. One left a rounding error on its wrong side
+    would never change sign, and the contact would slip on against its friction's
+    direction (measured on a tuned Coulomb ring: ``-7e-3`` m/s in ``slip+`` six steps on,
+    the period map jumping there; on tuned preloaded rings of 6 and 8 blades at engine
+    order ``N / 2``, before this applied to a contact whose own guard had fired or to one
+    slipping on, up to ``1.4e-4`` m/s, ``6.5e-3`` of the largest velocity), so such a
+    contact is marked as one fired early (``mark_near``): its guards read from the
+    boundary. Only a rounding error, ``RELEASE_ROUNDING`` of the largest velocity of the
+    state: a contact whose velocity a perturbation moved (the difference quotients of a
+    period map do) keeps its guards as they are, and the map stays differentiable as the
+    tangent has it. Not every slip of the problem's set: marks are a run's state, and a
+    ring's reduced map (runs over ``T / 4`` that start without them) then followed a
+    branch-point branch ``3e-2`` rad/s apart from the whole map. ``G`` is guard scratch.
     """
     nc = I[H_NC]
     full, nca = active_contacts(WI, nc)  # noqa: F821
     ac = wvec(WI, nc, WC_ALL if full else WC_AC)  # noqa: F821
     cm0, before, fired = wvec(WI, nc, WC_CM0), wvec(WI, nc, WC_BEFORE), wvec(WI, nc, WC_FIRED)  # noqa: F821
     ok = True
-    moved = False   # a contact the friction problem moved or left slipping (its ``before`` then -1)
+    moved = False   # a contact the friction problem moved, or a slip its projection took across zero (``before`` -1)
     if rigid_problem(cm, I, WI):
         for jj in range(nca):
             j = ac[jj] & NONNEG
@@ -196,10 +211,9 @@ def settle_event(t, y, cm, I, R, WI, WF, G, counters, max_pivots, log_t, log_c, 
                           counters, recording, fired)
             before[j] = -1
             moved = True
-        for jj in range(nca):   # the rigid slips the projection may have moved
+        for jj in range(nca):
             j = ac[jj] & NONNEG
-            K = I[I[O_CLAW] + j]
-            if RIGID[K, 0] >= 0 and cm[j] != 0 and not IS_STICK[K, cm[j]]:  # noqa: F821
+            if before[j] != -1 and projected_across(j, cm, y, I, R, WF):
                 before[j] = -1
                 moved = True
     factor_stick(cm, I, R, WI, WF)  # noqa: F821

@@ -73,16 +73,20 @@ def guards_of_forces(y, cm, I, R, WI, WF, G):
         guard_offsets(cm, I, WI, WF, G)
 
 
-def contact_rates(j, dy, n, cidx, cgn, cgr, ck):
-    """``(dNd/dt, dv/dt)`` of contact ``j``: its normal force's second derivative and slip acceleration."""
-    add = 0.0
-    vd = 0.0
+def slot_sum(j, cidx, g, x, off):
+    """``sum_k g[4 j + k] x[off + cidx[4 j + k]]`` over contact ``j``'s used slots: the rate of its penetration
+    (``g = cgn``) or slip (``g = cgr``) from the velocities (``off = n``) or accelerations of ``x``."""
+    s = 0.0
     for k in range(4):
         i = cidx[4 * j + k]
         if i >= 0:
-            add += cgn[4 * j + k] * dy[n + i]
-            vd += cgr[4 * j + k] * dy[n + i]
-    return ck[j] * add, vd
+            s += g[4 * j + k] * x[off + i]
+    return s
+
+
+def contact_rates(j, dy, n, cidx, cgn, cgr, ck):
+    """``(dNd/dt, dv/dt)`` of contact ``j``: its normal force's second derivative and slip acceleration."""
+    return ck[j] * slot_sum(j, cidx, cgn, dy, n), slot_sum(j, cidx, cgr, dy, n)
 
 
 def guard_rates(y, dy, cm, I, R, WI, WF, D, with_stick):
