@@ -22,10 +22,11 @@ open and ``open`` when closed, the law's guards follow from 1):
 ``lawK_guard_rates(mode, N, Nd, Ndd, v, vd, f, fd, y, so, R, I, j, a, D)``
     Time derivatives of the law guards into ``D[j, 1 + i]`` (``Ndd``, ``vd``, ``fd``:
     the rates of ``Nd``, ``v`` and of a rigid stick force; ``a``: ``dy/dt``, whose
-    law-state rates sit at ``a[so + i]``). ``Piecewise``, ``Min`` and ``Max`` have
-    their chosen branch's rate (``rate_expr``); not written (NaN) where a guard uses
-    ``Abs``, ``sign`` or ``Heaviside``; NaN through ``fd`` where the stick force's rate
-    is not known.
+    law-state rates sit at ``a[so + i]``). A ``Piecewise`` has its branch's rate, a
+    guard that is a ``Min`` or ``Max`` its chosen argument's (``rate_expr``,
+    ``_choice_rate_lines``); not written (NaN) where a guard uses ``Abs``, ``sign`` or
+    ``Heaviside``, or a ``Min`` inside an expression; NaN through ``fd`` where the stick
+    force's rate is not known.
 ``lawK_force_rate(mode, N, Nd, Ndd, v, vd, y, so, R, I, j, a)``
     Rate of an explicit-force mode's friction force (0 open or in rigid stick; NaN
     if not smooth).
@@ -130,20 +131,33 @@ def _check_rigid(law: FrictionLaw, ctx: ContactContext, name: str):
                          f"got {fp} and {fm}")
 
 
-#: Functions whose derivative is not an expression of the state: a guard using one gets no rate.
+#: Functions whose derivative is not an expression of the state: a guard using one gets no rate (``Min`` and
+#: ``Max`` have one only as the whole guard: ``_choice_rate_lines``).
 _NONSMOOTH = (sp.Abs, sp.sign, sp.Heaviside)
 
 
-def _nested_choice(e):
-    """``Min`` / ``Max`` as nested two-way ``Piecewise`` (the first argument against the choice among the rest),
-    whose derivative is the chosen argument's: linear in the number of arguments once shared sub-expressions are
-    taken out (SymPy's own rewrite compares every pair)."""
-    args = list(e.args)
-    better = (lambda a, b: a <= b) if isinstance(e, sp.Min) else (lambda a, b: a >= b)
-    rest = args[-1]
-    for a in reversed(args[:-1]):
-        rest = sp.Piecewise((a, better(a, rest)), (rest, True))
-    return rest
+def _branch_rate(g, smooth_rate):
+    """``dg/dt`` through ``Piecewise`` (the rate of the branch taken), the rest by ``smooth_rate``; raises
+    ``_NoRate`` for a ``Min`` or ``Max`` (only a guard that *is* one has a rate: ``_choice_rate_lines``)."""
+    if not g.has(sp.Piecewise, sp.Min, sp.Max):
+        return smooth_rate(g)
+    if isinstance(g, sp.Piecewise):
+        return sp.Piecewise(*[(_branch_rate(e, smooth_rate), c) for e, c in g.args], evaluate=False)
+    if isinstance(g, sp.Add):
+        return sp.Add(*[_branch_rate(a, smooth_rate) for a in g.args])
+    if isinstance(g, sp.Mul):
+        return sp.Add(*[_branch_rate(a, smooth_rate) * sp.Mul(*(g.args[:i] + g.args[i + 1:]))
+                        for i, a in enumerate(g.args)])
+    raise _NoRate
+
+
+class _NoRate(Exception):
+    """An expression ``_branch_rate`` does not differentiate through."""
+
+
+def _substituted(g, ctx: ContactContext, force):
+    g = sp.sympify(g)
+    return g if force is None else g.xreplace({ctx.f: force})
 
 
 def rate_expr(g, ctx: ContactContext, force, Ndd, vd, fd, zd):
@@ -153,21 +167,46 @@ def rate_expr(g, ctx: ContactContext, force, Ndd, vd, fd, zd):
     rigid stick mode, whose force is the stick solution with rate ``fd``. ``Ndd``,
     ``vd`` and ``zd`` (per law state) are the rates of ``Nd``, ``v`` and the states.
 
-    A ``Piecewise`` guard (one branch per discrete state, as an Iwan element's stick or
-    slip) has its branch's rate, a ``Min`` or ``Max`` the rate of the argument it
-    takes (the one-sided rate at the instant, the first argument's where two are
-    equal): a guard shared by several elements moves as its critical element does, and
-    the grazing check needs that rate to see the element's guard dip through zero and
-    come back inside a step. ``Abs``, ``sign`` and ``Heaviside`` give no rate.
+    A ``Piecewise`` (one branch per discrete state, as an Iwan element's stick or slip)
+    has its branch's rate. ``Abs``, ``sign``, ``Heaviside``, and ``Min`` or ``Max`` inside
+    an expression give none; a guard that is a ``Min`` or ``Max`` gets the rate of the
+    argument it takes from :func:`_choice_rate_lines`.
     """
-    g = sp.sympify(g)
-    if force is not None:
-        g = g.xreplace({ctx.f: force})
+    g = _substituted(g, ctx, force)
     if any(g.has(fn) for fn in _NONSMOOTH):
         return None
-    g = g.replace(lambda e: isinstance(e, (sp.Min, sp.Max)), _nested_choice)
     chain = [(ctx.N, ctx.Ndot), (ctx.Ndot, Ndd), (ctx.v, vd), (ctx.f, fd)] + list(zip(ctx.states.values(), zd))
-    return sp.Add(*[sp.diff(g, s) * rate for s, rate in chain])
+
+    def smooth_rate(e):
+        return sp.Add(*[sp.diff(e, s) * rate for s, rate in chain])
+
+    try:
+        return _branch_rate(g, smooth_rate)
+    except _NoRate:
+        return None
+
+
+def _choice_rate_lines(g, target, ctx, force, Ndd, vd, fd, zd, printer, pad, tag):
+    """Source lines that write into ``target`` the rate of a guard ``g`` that is a ``Min`` (``Max``) of arguments:
+    the rate of the first argument equal to it (the one-sided rate at the instant), found by one pass over the
+    arguments, so the code and the time to write it grow linearly with their number. A guard shared by several
+    elements (the Iwan law's) moves as its critical element does, and the grazing check needs that rate to see
+    the element's guard dip through zero and come back inside a step. None if an argument has no rate."""
+    g = _substituted(g, ctx, force)
+    if any(g.has(fn) for fn in _NONSMOOTH):
+        return None
+    rates = [rate_expr(a, ctx, None, Ndd, vd, fd, zd) for a in g.args]
+    if any(r is None for r in rates):
+        return None
+    better = "<" if isinstance(g, sp.Min) else ">"
+    L = _assign([g.args[0], rates[0]], [f"{tag}_g", f"{tag}_r"], printer, pad, f"{tag}_0")
+    for k, (a, r) in enumerate(zip(g.args[1:], rates[1:]), start=1):
+        L += _assign([a], [f"{tag}_a"], printer, pad, f"{tag}_{k}v")
+        L.append(f"{pad}if {tag}_a {better} {tag}_g:")
+        L.append(f"{pad}    {tag}_g = {tag}_a")
+        L += _assign([r], [f"{tag}_r"], printer, pad + "    ", f"{tag}_{k}r")
+    L.append(f"{pad}{target} = {tag}_r")
+    return L
 
 
 def _rates_source(K, ctx, modes, guard_lists, stick, explicit):
@@ -182,11 +221,16 @@ def _rates_source(K, ctx, modes, guard_lists, stick, explicit):
     body = []
     for m in range(1, len(modes)):
         force = None if stick[m] else explicit[m]
-        rates = [rate_expr(g.expr, ctx, force, Ndd, vd, fd, zd) for g in guard_lists[m]]
+        chosen = {i: _choice_rate_lines(g.expr, f"D[j, {1 + i}]", ctx, force, Ndd, vd, fd, zd, pr, " " * 8, f"c{i}")
+                  for i, g in enumerate(guard_lists[m]) if isinstance(g.expr, (sp.Min, sp.Max))}
+        rates = [None if i in chosen else rate_expr(g.expr, ctx, force, Ndd, vd, fd, zd)
+                 for i, g in enumerate(guard_lists[m])]
         known = [(i, r) for i, r in enumerate(rates) if r is not None]
-        if known:
+        lines = [line for i in sorted(chosen) if chosen[i] is not None for line in chosen[i]]
+        if known or lines:
             body.append(f"    {'if' if not body else 'elif'} mode == {m}:")
             body += _assign([r for _, r in known], [f"D[j, {1 + i}]" for i, _ in known], pr, " " * 8, "x")
+            body += lines
     L += body or ["    pass"]
     L.append("")
     L.append(f"def law{K}_force_rate(mode, N, Nd, Ndd, v, vd, y, so, R, I, j, a):")
