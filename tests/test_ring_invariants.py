@@ -17,28 +17,25 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs" / "tools"))
-from ring_invariants import GRID, AGAINST_TOL, LIMIT_TOL, SYMMETRY_TOL, over_the_limit, slip_against, turned_residual  # noqa: E402,E501
+from ring_invariants import GRID, AGAINST_TOL, LIMIT_TOL, SYMMETRY_TOL, check  # noqa: E402
 
-from blademodel.config import BladedDisk  # noqa: E402
-from blademodel.numeric import simulate  # noqa: E402
+
+def _assert_kept(draw, symmetry: bool) -> bool:
+    """Run ``draw`` and assert its friction limits, slip direction and (if ``symmetry``) its turn; whether the
+    turn was asked."""
+    _, over, sym, against = check(draw)
+    assert over <= LIMIT_TOL, draw
+    assert against <= AGAINST_TOL, draw
+    asked = symmetry and not math.isnan(sym)
+    if asked:
+        assert sym <= SYMMETRY_TOL, draw
+    return asked
 
 
 def test_rings_drawn_at_random_keep_their_friction_limits_and_their_symmetry():
     rng = np.random.default_rng(0)
-    symmetric = 0
-    for i in rng.choice(len(GRID), size=40, replace=False):
-        law, N, EO, gap, F0, omega, mistuning = GRID[i]
-        values = dict(blades=N, engine_order=EO, friction=law, gap=gap, F0=F0, omega=omega)
-        if mistuning:
-            values.update(mistuning_std=mistuning, mistuning_seed=3)
-        model = BladedDisk(**values).build()
-        r = simulate(model, periods=4)
-        assert over_the_limit(r) <= LIMIT_TOL, values
-        assert slip_against(model, r) <= AGAINST_TOL, values
-        g = math.gcd(EO, N)
-        if g > 1 and not mistuning and law != "iwan":
-            symmetric += 1
-            assert turned_residual(r, N, N // g) <= SYMMETRY_TOL, values
+    draws = [GRID[i] for i in rng.choice(len(GRID), size=40, replace=False)]
+    symmetric = sum(_assert_kept(d, symmetry=d[0] != "iwan") for d in draws)
     assert symmetric >= 5
 
 
@@ -47,21 +44,9 @@ def test_every_coulomb_and_bilinear_ring_of_the_grid_keeps_its_friction_its_dire
     """The whole grid of the survey for the Coulomb and bilinear laws (1152 rings, 4 periods each): every one keeps
     its friction limits and slips along its velocity, every tuned one with a common factor its symmetry. (Before
     the fixes of ``settle_event`` for slips left on the wrong side of their guards, three tuned preloaded Coulomb
-    rings at engine order ``N / 2`` slipped against their velocity by up to ``1.7e-3`` of the largest and broke their
-    symmetry by up to ``1.2e-3``.)"""
-    checked = 0
-    for law, N, EO, gap, F0, omega, mistuning in GRID:
-        if law == "iwan":
-            continue
-        values = dict(blades=N, engine_order=EO, friction=law, gap=gap, F0=F0, omega=omega)
-        if mistuning:
-            values.update(mistuning_std=mistuning, mistuning_seed=3)
-        model = BladedDisk(**values).build()
-        r = simulate(model, periods=4)
-        assert over_the_limit(r) <= LIMIT_TOL, values
-        assert slip_against(model, r) <= AGAINST_TOL, values
-        g = math.gcd(EO, N)
-        if g > 1 and not mistuning:
-            assert turned_residual(r, N, N // g) <= SYMMETRY_TOL, values
-        checked += 1
-    assert checked == 2 * len(GRID) // 3
+    rings at engine order ``N / 2`` slipped against their velocity by up to ``6.5e-3`` of the largest and broke their
+    symmetry by up to ``2.7e-3``.)"""
+    draws = [d for d in GRID if d[0] != "iwan"]
+    assert len(draws) == 2 * len(GRID) // 3
+    for d in draws:
+        _assert_kept(d, symmetry=True)

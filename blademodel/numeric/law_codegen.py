@@ -131,28 +131,9 @@ def _check_rigid(law: FrictionLaw, ctx: ContactContext, name: str):
                          f"got {fp} and {fm}")
 
 
-#: Functions whose derivative is not an expression of the state: a guard using one gets no rate (``Min`` and
-#: ``Max`` have one only as the whole guard: ``_choice_rate_lines``).
-_NONSMOOTH = (sp.Abs, sp.sign, sp.Heaviside)
-
-
-def _branch_rate(g, smooth_rate):
-    """``dg/dt`` through ``Piecewise`` (the rate of the branch taken), the rest by ``smooth_rate``; raises
-    ``_NoRate`` for a ``Min`` or ``Max`` (only a guard that *is* one has a rate: ``_choice_rate_lines``)."""
-    if not g.has(sp.Piecewise, sp.Min, sp.Max):
-        return smooth_rate(g)
-    if isinstance(g, sp.Piecewise):
-        return sp.Piecewise(*[(_branch_rate(e, smooth_rate), c) for e, c in g.args], evaluate=False)
-    if isinstance(g, sp.Add):
-        return sp.Add(*[_branch_rate(a, smooth_rate) for a in g.args])
-    if isinstance(g, sp.Mul):
-        return sp.Add(*[_branch_rate(a, smooth_rate) * sp.Mul(*(g.args[:i] + g.args[i + 1:]))
-                        for i, a in enumerate(g.args)])
-    raise _NoRate
-
-
-class _NoRate(Exception):
-    """An expression ``_branch_rate`` does not differentiate through."""
+#: Functions whose derivative is not an expression of the state: a guard using one gets no rate (a guard that *is*
+#: a ``Min`` or ``Max`` has its chosen argument's: ``_choice_rate_lines``).
+_NONSMOOTH = (sp.Abs, sp.sign, sp.Heaviside, sp.Min, sp.Max)
 
 
 def _substituted(g, ctx: ContactContext, force):
@@ -168,22 +149,15 @@ def rate_expr(g, ctx: ContactContext, force, Ndd, vd, fd, zd):
     ``vd`` and ``zd`` (per law state) are the rates of ``Nd``, ``v`` and the states.
 
     A ``Piecewise`` (one branch per discrete state, as an Iwan element's stick or slip)
-    has its branch's rate. ``Abs``, ``sign``, ``Heaviside``, and ``Min`` or ``Max`` inside
-    an expression give none; a guard that is a ``Min`` or ``Max`` gets the rate of the
-    argument it takes from :func:`_choice_rate_lines`.
+    has its branch's rate (SymPy differentiates it branch by branch). ``Abs``, ``sign``,
+    ``Heaviside``, ``Min`` and ``Max`` give none; a guard that is a ``Min`` or ``Max``
+    gets the rate of the argument it takes from :func:`_choice_rate_lines`.
     """
     g = _substituted(g, ctx, force)
     if any(g.has(fn) for fn in _NONSMOOTH):
         return None
     chain = [(ctx.N, ctx.Ndot), (ctx.Ndot, Ndd), (ctx.v, vd), (ctx.f, fd)] + list(zip(ctx.states.values(), zd))
-
-    def smooth_rate(e):
-        return sp.Add(*[sp.diff(e, s) * rate for s, rate in chain])
-
-    try:
-        return _branch_rate(g, smooth_rate)
-    except _NoRate:
-        return None
+    return sp.Add(*[sp.diff(g, s) * rate for s, rate in chain])
 
 
 def _choice_rate_lines(g, target, ctx, force, Ndd, vd, fd, zd, printer, pad, tag):
@@ -193,8 +167,6 @@ def _choice_rate_lines(g, target, ctx, force, Ndd, vd, fd, zd, printer, pad, tag
     elements (the Iwan law's) moves as its critical element does, and the grazing check needs that rate to see
     the element's guard dip through zero and come back inside a step. None if an argument has no rate."""
     g = _substituted(g, ctx, force)
-    if any(g.has(fn) for fn in _NONSMOOTH):
-        return None
     rates = [rate_expr(a, ctx, None, Ndd, vd, fd, zd) for a in g.args]
     if any(r is None for r in rates):
         return None

@@ -69,6 +69,10 @@ def slip_against(model, r) -> float:
     largest velocity (``<= 0`` but for rounding: a Coulomb slip follows its velocity); ``-inf`` for a ring of an
     elastic law (bilinear, Iwan), whose slip is its slider's."""
     ig = make_integrator(model, kernel="contact")
+    kinds = ig.kmeta["kinds"]
+    if len(kinds) != 1 or kinds[0]["rigid"] is None:   # an elastic law's slip is its slider's, not the contact's
+        return -math.inf
+    _, plus, minus = kinds[0]["rigid"]
     I, R = ig.I, ig.R
     n, nc = I[H_N], I[H_NC]
     cidx = I[I[O_CIDX]:I[O_CIDX] + 4 * nc].reshape(nc, 4)
@@ -79,13 +83,29 @@ def slip_against(model, r) -> float:
         for k in range(4):
             if cidx[j, k] >= 0:
                 v[:, j] += cgr[j, k] * u[:, cidx[j, k]]
-    kinds = ig.kmeta["kinds"]
-    if len(kinds) != 1 or kinds[0]["rigid"] is None:   # an elastic law's slip is its slider's, not the contact's
-        return -math.inf
-    _, plus, minus = kinds[0]["rigid"]
     modes = r.contacts["modes"]
     s = np.where(modes == plus, 1.0, np.where(modes == minus, -1.0, 0.0))
     return float(np.max(-s * v) / max(np.max(np.abs(u)), 1e-300))
+
+
+def check(draw, periods: int = 4):
+    """Run the ring of a ``GRID`` entry ``periods`` periods from rest; ``(r, over, symmetry, against)``: the result,
+    ``over_the_limit``, ``turned_residual`` by ``N / g`` blades (NaN where the ring is mistuned or ``g = 1``) and
+    ``slip_against``."""
+    law, N, EO, gap, F0, omega, mistuning = draw
+    values = dict(blades=N, engine_order=EO, friction=law, gap=gap, F0=F0, omega=omega)
+    if mistuning:
+        values.update(mistuning_std=mistuning, mistuning_seed=3)
+    model = BladedDisk(**values).build()
+    r = simulate(model, periods=periods)
+    g = math.gcd(EO, N)
+    sym = turned_residual(r, N, N // g) if g > 1 and not mistuning else math.nan
+    return r, over_the_limit(r), sym, slip_against(model, r)
+
+
+def failed(over, sym, against) -> bool:
+    """Whether a draw's checks (``check``) failed."""
+    return over > LIMIT_TOL or sym > SYMMETRY_TOL or against > AGAINST_TOL
 
 
 def main(argv=None) -> int:
@@ -95,29 +115,22 @@ def main(argv=None) -> int:
     ap.add_argument("--periods", type=int, default=4)
     args = ap.parse_args(argv)
     rng = np.random.default_rng(args.seed)
-    failed = 0
+    count = 0
     for i in rng.choice(len(GRID), size=min(args.draws, len(GRID)), replace=False):
         law, N, EO, gap, F0, omega, mistuning = GRID[i]
-        values = dict(blades=N, engine_order=EO, friction=law, gap=gap, F0=F0, omega=omega)
-        if mistuning:
-            values.update(mistuning_std=mistuning, mistuning_seed=3)
-        label = " ".join(f"{k}={v}" for k, v in values.items())
+        label = (f"friction={law} blades={N} engine_order={EO} gap={gap} F0={F0} omega={omega}"
+                 + (f" mistuning_std={mistuning}" if mistuning else ""))
         try:
-            model = BladedDisk(**values).build()
-            r = simulate(model, periods=args.periods)
+            r, over, sym, against = check(GRID[i], args.periods)
         except Exception as e:   # a run that stops is a finding, not the end of the survey
             print(f"{label} ERR {type(e).__name__}: {e}", flush=True)
-            failed += 1
+            count += 1
             continue
-        over = over_the_limit(r)
-        g = math.gcd(EO, N)
-        sym = turned_residual(r, N, N // g) if g > 1 and not mistuning else math.nan
-        against = slip_against(model, r)
-        bad = over > LIMIT_TOL or sym > SYMMETRY_TOL or against > AGAINST_TOL
-        failed += bad
+        bad = failed(over, sym, against)
+        count += bad
         print(f"{label} events={r.counters['events']} over={over:.1e} symmetry={sym:.1e} against={against:.1e}"
               f"{'  <<<' if bad else ''}", flush=True)
-    print(f"{failed} of {min(args.draws, len(GRID))} draws failed a check")
+    print(f"{count} of {min(args.draws, len(GRID))} draws failed a check")
     return 0
 
 
