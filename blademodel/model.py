@@ -82,6 +82,23 @@ class Model:
         """Coordinate names in state order (mass by mass, ``x`` before ``y``)."""
         return tuple(c for m in self.masses for c in m.coordinates)
 
+    def law_state_labels(self) -> list[tuple[str, str, str]]:
+        """The friction laws' states in state-vector order: ``(label, contact name, state name)`` each.
+
+        The label is the state's name, or ``<name>_<contact>`` where the laws of two
+        contacts have a state of that name (every kernel names the state vector so).
+        """
+        names = [st for c in self.contacts for st in c.friction.states]
+        return [(st if names.count(st) == 1 else f"{st}_{c.name}", c.name, st)
+                for c in self.contacts for st in c.friction.states]
+
+    def discrete_state_indices(self) -> list[int]:
+        """Positions in the physical state vector (coordinates, velocities, law states) of the laws'
+        ``discrete_states``: labels that only resets set, held as part of a periodic orbit's mode."""
+        first = 2 * len(self.coordinates)
+        by_contact = {c.name: set(c.friction.discrete_states) for c in self.contacts}
+        return [first + k for k, (_, c, st) in enumerate(self.law_state_labels()) if st in by_contact[c]]
+
     @cached_property
     def parameters(self) -> dict[str, float]:
         """Every numeric parameter by symbol name, in a fixed order."""

@@ -330,13 +330,11 @@ class ContactIntegrator(Integrator):
         self.kind = kind
         coords = list(model.coordinates)
         n = len(coords)
-        offsets, names, pos = [], [], 0
-        all_states = [s for c in model.contacts for s in c.friction.states]
+        offsets, pos = [], 0
         for c in model.contacts:
             offsets.append(pos)
-            for st in c.friction.states:
-                names.append(st if all_states.count(st) == 1 else f"{st}_{c.name}")
             pos += len(c.friction.states)
+        names = [label for label, _, _ in model.law_state_labels()]
         self.n_physical = 2 * n + pos
         self._layout = (offsets, pos)
         self._step_limits: dict = {}   # stable step by the modes' Jacobians, shared by with_parameters copies

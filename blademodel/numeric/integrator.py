@@ -237,6 +237,15 @@ class Integrator:
     def state_names(self) -> list[str]:
         return list(self.meta["state"])
 
+    @property
+    def discrete_states(self) -> np.ndarray:
+        """Positions of the friction laws' ``discrete_states`` in the state vector (whole-number labels that only
+        resets set: a periodic orbit holds them as part of its mode, :mod:`blademodel.orbits`)."""
+        found = self.__dict__.get("_discrete_states")
+        if found is None:   # the structure fixes them: kept, and shared by the copies made for other values
+            found = self._discrete_states = np.array(self.model.discrete_state_indices(), dtype=np.int64)
+        return found
+
     def worker(self) -> "Integrator":
         """This integrator with work arrays of its own, to run in another thread.
 

@@ -58,7 +58,7 @@ from .corrector import _Context, _at_kink, _field_bracket, _off_circle, _special
 from .family import _Family
 from .period_map import FlowError, _copy, _key, kernel_mode
 from .self_overlap import SelfOverlap
-from .shooting import (ShootingError, _n_coordinates, _scale_of_excursions, find_periodic_orbit)
+from .shooting import (ShootingError, _n_coordinates, _scale_of_excursions, find_periodic_orbit, residual_size)
 
 
 def continuation(config, name: str, start: float, stop: float, *, periods: int = 1, guess=None, mode=None,
@@ -283,7 +283,7 @@ def _travelling_wave(ctx, X, mode, name, at):
     """
     from .cyclic import CyclicError
     r, _ = ctx.residual(X, mode)
-    off = float(np.max(np.abs(r)))
+    off = residual_size(r, ctx.discrete)
     Xc, mc, _ = ctx.correct_at_value(X, mode, jacobian=False) if off <= WAVE_TOL else (None, mode, None)
     if Xc is None:
         raise CyclicError(f"the first orbit at {name} = {at:g} is no travelling wave: turned by the symmetry it is "
@@ -578,7 +578,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         # each state scaled by its excursion on the newest orbit: amplitudes that grow a
         # hundredfold through a resonance do not shrink the steps a hundredfold
         taken = float(np.linalg.norm(X_new - X))
-        X, T, A = ctx.rescale(_scale_of_excursions(new["magnitude"], n_q), X_new, T_new, A_new)
+        X, T, A = ctx.rescale(_scale_of_excursions(new["magnitude"], n_q, ctx.discrete), X_new, T_new, A_new)
         new["X"], new["A"], new["T"] = X, A, T   # (T: to come back to, after a wrong turn)
         m = m_new
         h = min(h * 1.5, ds_max) if iterations <= 4 else (h if iterations <= 8 else h / 2)
@@ -603,7 +603,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             q = pts[k]
             _truncate(pts, special, overlap, k + 1, q["n_special"])
             X, T, A, m = q["X"], q["T"], q["A"], _copy(q["mode"])
-            ctx.scale = _scale_of_excursions(q["magnitude"], n_q)   # the scaling X, T and A were rescaled to
+            ctx.scale = _scale_of_excursions(q["magnitude"], n_q, ctx.discrete)   # the scaling X, T and A were rescaled to
             ds_max /= 2
             h = min(h, ds_max)
             landing, shots, jumped, ahead, switched, gap_tried = None, True, False, False, False, False

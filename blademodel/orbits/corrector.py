@@ -21,7 +21,7 @@ from .background import Locator, PendingPoint
 from .branch import SpecialPoint
 from .family import _Family
 from .period_map import FlowError, _copy, _key
-from .shooting import ShootingError, _same, _shoot
+from .shooting import ShootingError, _same, _shoot, residual_size, scaled_residual
 
 
 def _turns(p, q, T_p=None) -> bool:
@@ -112,9 +112,28 @@ class _Context:
         self.grazing_tol = grazing_tol   # grazing points' location tolerance (None: the bifurcations' locate_tol)
         self.locator: Locator | None = None   # where grazing points are located (set by _run for its branch)
         self.n = scale.size
+        self._discrete = None
         self.iterations = 0
         self._run = None   # the last residual's run (its events and signature: :attr:`events`, :attr:`signature`)
         self.why = ""
+
+    @property
+    def discrete(self) -> np.ndarray:
+        """Positions of the friction laws' discrete states among the unknowns (held as labels, scaled by
+        :data:`~.shooting.LABEL_SCALE`)."""
+        if self._discrete is None:
+            self._discrete = self.fam.discrete
+        return self._discrete
+
+    def hold(self, G: np.ndarray) -> np.ndarray:
+        """``G`` (the orbit rows of a Jacobian in the scaled unknowns, and more rows) with the discrete states'
+        rows and columns as :func:`~.period_map.hold_discrete` leaves them: ``-1`` on the diagonal, else zero."""
+        d = self.discrete
+        if d.size:
+            G[:self.n, d] = 0.0
+            G[d, :] = 0.0
+            G[d, d] = -1.0
+        return G
 
     @property
     def events(self) -> int:
@@ -179,7 +198,7 @@ class _Context:
         y = X[:-1] * self.scale
         Py, mode_end = P(y, _copy(mode))
         self._run = P.last_run
-        return (Py - y) / self.scale, mode_end
+        return scaled_residual(Py, y, self.scale, self.discrete), mode_end
 
     def jacobian(self, X, mode, column=None):
         """``d residual / dX`` (``n x (n + 1)``): the tangent of the flow where it exists, else central differences.
@@ -211,6 +230,7 @@ class _Context:
         c = None if column is None else column(X, mode, A[:, :n])
         A[:, n] = c if c is not None else \
             (self.fam.map_at(lam + d * self.span).plain(y, mode) - P(y, mode)[0]) / self.scale / d
+        A[self.discrete, n] = 0.0   # labels do not move with the field (a difference would read a jump)
         return A
 
     def correct(self, X, T, mode, A=None, jacobian=True, tol=None, newton=True, column=None, quick=False):
@@ -252,7 +272,7 @@ class _Context:
                 for it in range(2 * self.max_corrections if chord else self.max_corrections):
                     r, mode_end = self.residual(Xc, mode)
                     first_end = mode_end if first_end is None else first_end
-                    res = float(np.max(np.abs(r)))
+                    res = residual_size(r, self.discrete)
                     if res <= tol:
                         break
                     if res < 0.5 * best:
@@ -266,12 +286,14 @@ class _Context:
                     F = np.append(r, np.dot(T, Xc - Xp))
                     if chord and X_old is not None:   # Broyden: the secant condition along the step taken
                         step = Xc - X_old
-                        G = G + np.outer(F - F_old - G @ step, step) / np.dot(step, step)
+                        G = self.hold(G + np.outer(F - F_old - G @ step, step) / np.dot(step, step))
                     if res >= res_old and halvings < MAX_HALVINGS:
                         # no decrease (the step crossed a kink of the map, where an event appears or
                         # leaves, and undamped corrections cycle between its sides): back halfway
                         halvings += 1
+                        labels = Xc[self.discrete]
                         Xc = X_old + 0.5 * (Xc - X_old)
+                        Xc[self.discrete] = labels   # a label is set whole, not halved
                         continue
                     halvings = 0
                     if not chord:
@@ -334,7 +356,9 @@ class _Context:
         Lb = (h - s0) * h / ((s1 - s0) * s1)
         Lc = (h - s0) * (h - s1) / (s0 * s1)
         Aa, Ab = (self._jacobian_of(q) for q in (a, b))
-        return La * Xa + Lb * Xb + Lc * X, La * Aa + Lb * Ab + Lc * A
+        Xp = La * Xa + Lb * Xb + Lc * X
+        Xp[self.discrete] = X[self.discrete]   # the last point's labels
+        return Xp, La * Aa + Lb * Ab + Lc * A
 
     def column_rule(self, pts):
         """The field's column of a new point's Jacobian from the branch's own points, or None.

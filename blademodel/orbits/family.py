@@ -104,6 +104,12 @@ class _Family:
                                          self.jacobian, self.workers, symmetry=self.symmetry)
         return self._cache[key]
 
+    @property
+    def discrete(self) -> np.ndarray:
+        """Positions of the friction laws' discrete states (:attr:`.period_map.PeriodMap.discrete`), once a period
+        map exists."""
+        return self._first.discrete_states
+
     def state_names(self) -> list:
         """The names of the integrator's states (once a period map exists)."""
         return list(self._first.meta["state"])

@@ -166,6 +166,9 @@ class PeriodMap:
         self._ig = integrator if symmetry is None else symmetry.reduced(integrator)   # the one that integrates
         self.periods = int(periods)
         self.n = integrator.n_physical
+        #: the friction laws' discrete states (labels only resets set): held as part of the mode, their rows and
+        #: columns of every Jacobian zero (:func:`hold_discrete`)
+        self.discrete = integrator.discrete_states
         self.evaluations = 0   # integrations of the map (each over ``periods`` excitation periods)
         self.replays = 0       # tangent replays of a kept run (no integration)
         self.method = jacobian
@@ -196,6 +199,7 @@ class PeriodMap:
             # left (ContactIntegrator.settle), which a run before it has cleared
             full[:] = 0.0
             full[:self.n] = y[:self.n]
+            full[self.discrete] = np.rint(full[self.discrete])   # labels: whole numbers, whatever Newton made
             fired: list = []
             m0 = settle(ig, full, _copy(mode), fired)
             start = full.copy()
@@ -273,8 +277,8 @@ class PeriodMap:
                 M = M @ self._contact_tangent.settle_jacobian(*r.fired[0])
             if self.symmetry is not None:
                 M = self.symmetry.jacobian(M)
-            return FlowSensitivity(state=r.end[:self.n].copy(), mode=_copy(r.mode_end), monodromy=M, parameter=None,
-                                   events=r.n_log)
+            return FlowSensitivity(state=r.end[:self.n].copy(), mode=_copy(r.mode_end),
+                                   monodromy=hold_discrete(M, self.discrete), parameter=None, events=r.n_log)
         s = flow_sensitivity(ig, r.start[:self.n], r.mode, self.periods, dp=dp, dperiod=dperiod,
                              run=(r.end, r.mode_end, r.log, r.n_log), record=r.states)
         if r.fired:
@@ -282,6 +286,9 @@ class PeriodMap:
             if s.parameter is not None:
                 s.parameter = s.parameter + s.monodromy @ dl
             s.monodromy = s.monodromy @ D
+        s.monodromy = hold_discrete(s.monodromy, self.discrete)
+        if s.parameter is not None:
+            s.parameter[self.discrete] = 0.0
         return s
 
     def __call__(self, y, mode):
@@ -335,14 +342,17 @@ class PeriodMap:
 
         Central differences (``2 n`` integrations), or forward ones from ``P(y)`` where
         the map was made with ``jacobian="forward"`` (``n``, and ``P(y)`` from the kept
-        run where the residual at ``y`` was just evaluated). The first column is
+        run where the residual at ``y`` was just evaluated). The columns and rows of the
+        discrete states are zero (:func:`hold_discrete`), nothing integrated for them. The first column is
         timed; if it took at least :attr:`thread_column_seconds`, the others are shared
         among ``workers`` threads, each integrating with its own copy of the integrator
         (:meth:`~blademodel.numeric.integrator.Integrator.worker`). The result does not
         depend on how they were shared.
         """
         y = np.asarray(y, dtype=float)
-        J = np.empty((self.n, self.n))
+        J = np.zeros((self.n, self.n))
+        held = set(self.discrete.tolist())
+        free = [i for i in range(self.n) if i not in held]
         base = self(y, mode)[0] if self.method == "forward" else None   # counted by run()
         stop = threading.Event()
 
@@ -361,22 +371,37 @@ class PeriodMap:
                 J[:, i] = (self._plain(ig, yp, mode) - self._plain(ig, ym, mode)) / (2.0 * d)
 
         t0 = time.perf_counter()
-        columns(self._ig, range(1))
-        w = min(self.workers, self.n - 1)
+        columns(self._ig, free[:1])
+        w = min(self.workers, len(free) - 1)
         if w <= 1 or time.perf_counter() - t0 < self.thread_column_seconds:
-            columns(self._ig, range(1, self.n))
+            columns(self._ig, free[1:])
         else:
             from concurrent.futures import ThreadPoolExecutor
             with ThreadPoolExecutor(max_workers=w) as pool:
                 # round robin: columns of neighbouring states cost alike, so each thread gets its share
-                jobs = [pool.submit(columns, self._ig.worker(), range(1 + k, self.n, w)) for k in range(w)]
+                jobs = [pool.submit(columns, self._ig.worker(), free[1 + k::w]) for k in range(w)]
                 try:
                     for job in jobs:
                         job.result()   # re-raises a worker's FlowError here
                 finally:
                     stop.set()   # after an error or a Ctrl-C the other threads end at their next column
-        self.evaluations += self.n if base is not None else 2 * self.n
-        return J
+        self.evaluations += len(free) if base is not None else 2 * len(free)
+        return hold_discrete(J, self.discrete)
+
+
+def hold_discrete(M: np.ndarray, discrete: np.ndarray) -> np.ndarray:
+    """``M`` (a period map's Jacobian, in place) with the rows and columns of the ``discrete`` states zero.
+
+    A friction law's discrete states (:attr:`~blademodel.components.friction.base.FrictionLaw.discrete_states`)
+    are labels, piecewise constant along the flow and set by resets: the map's derivative in them is not
+    defined (a difference step would read as another label) and their own derivative is zero wherever it is.
+    Zero rows and columns make Newton's step on ``P(y) - y`` take them to ``P``'s labels and leave the other
+    unknowns alone, and give each a multiplier zero.
+    """
+    if discrete.size:
+        M[discrete, :] = 0.0
+        M[:, discrete] = 0.0
+    return M
 
 
 def worker_count(workers: int | None) -> int:
@@ -402,6 +427,7 @@ def _plain_map(ig, periods: int, y, mode) -> np.ndarray:
     n = ig.n_physical
     full = np.zeros(ig.n_state)
     full[:n] = y
+    full[ig.discrete_states] = np.rint(full[ig.discrete_states])   # labels, as in PeriodMap.run
     mode = settle(ig, full, _copy(mode))
     status, _, t = ig.advance(full, mode, 0, periods, check=False)
     if status != 0:

@@ -90,20 +90,49 @@ class PeriodicOrbit:
         return complex(2.0 * c) if round(j) else complex(c)
 
 
-def _state_scale(y_hist: np.ndarray, n_q: int) -> np.ndarray:
-    """Per-state scale for residuals and difference steps: each state's excursion, floored by its group's."""
-    return _scale_of_excursions(np.max(np.abs(y_hist), axis=0), n_q)
+#: The scale of a friction law's discrete states (labels such as an Iwan element's ``0``, ``+-1``): so large that
+#: a label's scaled value, and a change of label between two points of a branch, is far below any step or
+#: tolerance of the scaled unknowns (a power of two, so that labels are scaled and back exactly). Whether the
+#: labels come back is asked apart (:func:`residual_size`); Newton's step sets them, as the Jacobian's rows
+#: for them are ``-1`` on the diagonal and zero elsewhere (:func:`~.period_map.hold_discrete`).
+LABEL_SCALE = 2.0 ** 40
 
 
-def _scale_of_excursions(amp: np.ndarray, n_q: int) -> np.ndarray:
+def _state_scale(y_hist: np.ndarray, n_q: int, discrete=()) -> np.ndarray:
+    """Per-state scale for residuals and difference steps: each state's excursion, floored by its group's;
+    ``discrete`` (the laws' discrete states) :data:`LABEL_SCALE`."""
+    return _scale_of_excursions(np.max(np.abs(y_hist), axis=0), n_q, discrete)
+
+
+def _scale_of_excursions(amp: np.ndarray, n_q: int, discrete=()) -> np.ndarray:
     """:func:`_state_scale` from each state's largest magnitude ``amp``."""
-    scale = amp.copy()
+    amp = np.asarray(amp, dtype=float).copy()
     n = amp.size
+    labels = np.zeros(n, dtype=bool)
+    labels[np.asarray(discrete, dtype=np.int64)] = True
+    amp[labels] = 0.0   # a label's size is no measure of the law states beside it
+    scale = amp.copy()
     for sl in (slice(0, n_q), slice(n_q, 2 * n_q), slice(2 * n_q, n)):
         if sl.start < sl.stop:
             g = np.max(amp[sl])
             scale[sl] = np.maximum(scale[sl], 1e-3 * g)
-    return np.maximum(scale, 1e-300) if np.any(scale > 0) else np.ones(n)
+    scale = np.maximum(scale, 1e-300) if np.any(scale > 0) else np.ones(n)
+    scale[labels] = LABEL_SCALE
+    return scale
+
+
+def scaled_residual(Py: np.ndarray, y: np.ndarray, scale: np.ndarray, discrete) -> np.ndarray:
+    """``(P(y) - y) / scale``, the discrete states' labels read as the map reads them (whole numbers)."""
+    r = (Py - y) / scale
+    r[discrete] = (Py[discrete] - np.rint(y[discrete])) / scale[discrete]
+    return r
+
+
+def residual_size(r: np.ndarray, discrete) -> float:
+    """``max |r|`` of a scaled residual, or at least 1 where a discrete state (scaled by :data:`LABEL_SCALE`)
+    does not come back to its label: such an orbit is not periodic whatever the rest."""
+    res = float(np.max(np.abs(r)))
+    return max(res, 1.0) if len(discrete) and np.any(r[discrete] != 0.0) else res
 
 
 def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, transient: int = 20,
@@ -183,7 +212,7 @@ def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, trans
             raise FlowError(f"the transient stopped at t = {t:.6g} s with status {status}")
     y = y_full[:n].copy()
     n_q = _n_coordinates(ig)
-    scale = _state_scale(_orbit_samples(ig, y, mode, periods)[1], n_q)
+    scale = _state_scale(_orbit_samples(ig, y, mode, periods)[1], n_q, P.discrete)
 
     history = []
     y, mode = _shoot(P, y, mode, scale, tol, max_iter, rel_step, history)
@@ -218,8 +247,8 @@ def _newton(P, y, mode, scale, tol, max_iter, rel_step, history):
     n = y.size
     for it in range(max_iter + 1):
         Py, mode_end = P(y, _copy(mode))   # kept: the tangent below replays this run
-        r = (Py - y) / scale
-        res = float(np.max(np.abs(r)))
+        r = scaled_residual(Py, y, scale, P.discrete)
+        res = residual_size(r, P.discrete)
         history.append(res)
         if res <= tol:
             return y, mode_end
@@ -232,9 +261,10 @@ def _newton(P, y, mode, scale, tol, max_iter, rel_step, history):
         lam = 1.0
         for _ in range(9):
             y_try = y + lam * step
+            y_try[P.discrete] = y[P.discrete] + step[P.discrete]   # a label is set whole, not halved
             try:
-                r_try = (P(y_try, _copy(mode))[0] - y_try) / scale
-                if np.max(np.abs(r_try)) < res:
+                r_try = scaled_residual(P(y_try, _copy(mode))[0], y_try, scale, P.discrete)
+                if residual_size(r_try, P.discrete) < res:
                     break
             except FlowError:
                 pass

@@ -158,7 +158,7 @@ def _at_point(config, name, point: SpecialPoint, kind: str, what: str, start, st
         full = np.zeros(ig.n_state)
         full[:y.size] = y
         mode = ig.mode_of(full)
-    scale = _state_scale(_orbit_samples(ig, y, mode, periods)[1], _n_coordinates(ig))
+    scale = _state_scale(_orbit_samples(ig, y, mode, periods)[1], _n_coordinates(ig), ig.discrete_states)
     return fam, ig, y, mode, scale, (lo, hi)
 
 
@@ -195,7 +195,8 @@ def _switched(ctx, point: SpecialPoint, y, mode, v, is_new, old: str, bounds, *,
                         f"critical eigenvector")
     T1 = _tangent(A1, X1 - X0)
     pts = [ctx.point(X0, mode, A0), ctx.point(X1, m1, A1)]
-    X, T, A = ctx.rescale(_state_scale(pts[-1]["Y"], _n_coordinates(fam.map_at(point.param).integrator)),
+    X, T, A = ctx.rescale(_state_scale(pts[-1]["Y"], _n_coordinates(fam.map_at(point.param).integrator),
+                                       ctx.discrete),
                           X1, T1, A1)
     pts[-1]["X"], pts[-1]["A"] = X, A
     return _run(ctx, pts, X, T, m1, A, bounds, ds=ds, **follow)

@@ -54,9 +54,7 @@ def points(study: Study) -> tuple[list[str], list[list[float]], list[str], list[
 def _state_names(model) -> list[str]:
     """The names of the state vector, as the kernels name it: coordinates, ``v`` + coordinates, law states."""
     coords = list(model.coordinates)
-    law_states = [st for c in model.contacts for st in c.friction.states]
-    names = [st if law_states.count(st) == 1 else f"{st}_{c.name}" for c in model.contacts for st in c.friction.states]
-    return [*coords, *(f"v{c}" for c in coords), *names]
+    return [*coords, *(f"v{c}" for c in coords), *(label for label, _, _ in model.law_state_labels())]
 
 
 def _say(message: str) -> None:

@@ -45,12 +45,7 @@ from .system import (
 def _state_symbols(model: Model):
     q = {c: sp.Symbol(c, real=True) for c in model.coordinates}
     u = {c: sp.Symbol(f"v{c}", real=True) for c in model.coordinates}
-    names = [s for c in model.contacts for s in c.friction.states]
-    s = {}
-    for c in model.contacts:
-        for st in c.friction.states:
-            label = st if names.count(st) == 1 else f"{st}_{c.name}"
-            s[(c.name, st)] = sp.Symbol(label, real=True)
+    s = {(c, st): sp.Symbol(label, real=True) for label, c, st in model.law_state_labels()}
     return q, u, s
 
 

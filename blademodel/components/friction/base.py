@@ -173,10 +173,19 @@ class FrictionLaw(ABC):
         Modes of the closed contact (``"open"`` is added by the contact).
     states : tuple of str
         Names of the law's continuous internal states (``()`` for none).
+    discrete_states : tuple of str
+        Those of :attr:`states` that are labels, not quantities: modes of the law's
+        parts held as numbers (an Iwan element's stick or slip, ``0`` or ``+-1``). Their
+        rate is zero in every mode, open included, and only resets set them. Periodic
+        orbits hold them as part of the orbit's mode (:mod:`blademodel.orbits`): they are
+        not unknowns of the shooting, and the period map is not differentiated in them
+        (nudged by a difference step, such a label would read as another part's mode).
+        ``()`` by default.
     """
 
     modes: tuple[str, ...] = ()
     states: tuple[str, ...] = ()
+    discrete_states: tuple[str, ...] = ()
 
     @abstractmethod
     def parameters(self) -> dict[str, Param]:

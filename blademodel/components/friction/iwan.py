@@ -81,6 +81,8 @@ class Iwan(FrictionLaw):
         numbers, ``0`` stick, ``+1`` / ``-1`` slip in that direction. The ``s_i``
         have zero rate and change only in resets, so the law has a **single**
         closed mode ``closed`` (per-element modes would make ``3**n`` global modes).
+        They are its ``discrete_states``: a periodic orbit holds them as part of its
+        mode, they are not unknowns of the shooting.
     Force
         ``f = sum_i kd_i z_i``.
     Rates
@@ -187,6 +189,7 @@ class Iwan(FrictionLaw):
         })
         object.__setattr__(self, "states", tuple(f"z{i}" for i in range(1, n + 1))
                            + tuple(f"s{i}" for i in range(1, n + 1)))
+        object.__setattr__(self, "discrete_states", tuple(f"s{i}" for i in range(1, n + 1)))
 
     def _fractions(self, name: str, n: int) -> tuple[float, ...]:
         values = getattr(self, name)

@@ -125,6 +125,13 @@ class _Checker:
             if not _is_expr(v):
                 raise self.fail(f"{where}[{k!r}] = {_short(v)}; expected a SymPy expression or a number")
 
+    def held(self, rates: Mapping, where: str, discrete: tuple[str, ...]) -> None:
+        """Refuse a rate of a discrete state that is not zero (such a state changes in resets only)."""
+        for k in discrete:
+            if k in rates and sp.sympify(rates[k]) != 0:
+                raise self.fail(f"{where}[{k!r}] = {_short(rates[k])}, but {k!r} is among discrete_states, whose "
+                                f"rate must be zero (resets alone set them)")
+
     def items(self, value: Any, where: str, what: str, nonempty: bool) -> list:
         """``value`` as a list, if it is an iterable of items (a list, tuple or generator)."""
         if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
@@ -151,13 +158,19 @@ class _Checker:
         if "open" in modes:
             raise self.fail(f"modes = {modes} must not contain 'open' (the contact adds it)")
         states = self.names("states", identifiers=True, nonempty=False)
+        discrete = self.names("discrete_states", identifiers=True, nonempty=False)
+        if not set(discrete) <= set(states):
+            raise self.fail(f"discrete_states = {discrete} names {sorted(set(discrete) - set(states))}, which are "
+                            f"not among its states {states}")
         ctx = self.context(states)
         for mode in modes:
             force = self.call("force", mode, ctx)
             if not (isinstance(force, StickConstraint) or _is_expr(force)):
                 raise self.fail(f"force({mode!r}, ctx) returned {_short(force)}; expected a SymPy expression, "
                                 f"a number or STICK")
-            self.state_map(self.call("rates", mode, ctx), f"rates({mode!r}, ctx)", states)
+            rates = self.call("rates", mode, ctx)
+            self.state_map(rates, f"rates({mode!r}, ctx)", states)
+            self.held(rates, f"rates({mode!r}, ctx)", discrete)
             guards = self.items(self.call("guards", mode, ctx), f"guards({mode!r}, ctx)", "Guard", nonempty=False)
             for i, g in enumerate(guards):
                 where = f"guards({mode!r}, ctx)[{i}]"
@@ -170,7 +183,9 @@ class _Checker:
                 self.candidates(g.candidates, f"{where}.candidates", modes, states)
         self.candidates(self.call("entry", ctx), "entry(ctx)", modes, states)
         self.state_map(self.call("exit_reset", ctx), "exit_reset(ctx)", states)
-        self.state_map(self.call("open_rates", ctx), "open_rates(ctx)", states)
+        open_rates = self.call("open_rates", ctx)
+        self.state_map(open_rates, "open_rates(ctx)", states)
+        self.held(open_rates, "open_rates(ctx)", discrete)
         energy = self.call("stored_energy", ctx)
         if not _is_expr(energy):
             raise self.fail(f"stored_energy(ctx) returned {_short(energy)}; expected a SymPy expression or a number")

@@ -1,0 +1,139 @@
+"""A friction law's discrete states (the Iwan elements' stick/slip labels) in shooting and continuation.
+
+The labels ``s_i`` are whole numbers that only resets set. Taken as unknowns, Newton's method nudged them
+by a difference step or a correction (``s = 1e-19`` reads as a slipping element), which made every Iwan
+orbit that a transient had not already settled unreachable, and the differences gave multipliers of
+``5e5`` (``1 / (2 rel_step)``) on a continued branch.
+"""
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from blademodel.components.friction.base import Candidate, FrictionLaw
+from blademodel.components.friction.validation import FrictionLawError, check_law
+from blademodel.components._sympy import sp
+from blademodel.components.parameter import as_param
+from blademodel.config import BladedDisk
+from blademodel.numeric import simulate
+from blademodel.numeric.kernels import make_integrator
+from blademodel.orbits import PeriodMap, continuation, find_periodic_orbit
+from blademodel.zheng2022 import BladePair
+
+
+def _iwan_pair(omega=300.0):
+    return BladePair(friction="iwan", omega=omega).build()
+
+
+def test_the_labels_are_the_iwan_elements_modes_in_both_kernels():
+    pair = make_integrator(_iwan_pair(), kernel="product")
+    assert [pair.state_names[i] for i in pair.discrete_states] == ["s1", "s2", "s3", "s4"]
+    ring = make_integrator(BladedDisk(blades=4, friction="iwan").build(), kernel="contact")
+    names = [ring.state_names[i] for i in ring.discrete_states]
+    assert names == [f"s{e}_c{c}" for c in range(1, 5) for e in range(1, 5)]
+
+
+def test_an_iwan_orbit_is_found_from_a_short_transient_and_is_the_attractor():
+    """Five periods from rest leave the residual at 2e-3; Newton's method must take it from there (before, it
+    stalled at the first step: the labels it moved made every trial another motion). The orbit is checked
+    against the state that 300 periods from rest settle to (the pair contracts by 0.65 a period)."""
+    model = _iwan_pair()
+    orbit = find_periodic_orbit(model, transient=5)
+    assert len(orbit.history) >= 3 and orbit.history[0] > 1e-4   # Newton's method did the work
+    r = simulate(model, periods=300, steps_per_period=1000)
+    settled = r.final_state[:orbit.state.size]
+    scale = np.max(np.abs(orbit.y), axis=0)
+    continuous = [i for i, name in enumerate(orbit.state_names) if not name.startswith("s")]
+    assert_allclose(orbit.state[continuous] / scale[continuous], settled[continuous] / scale[continuous],
+                    atol=1e-8)
+    assert np.array_equal(orbit.state[12:], settled[12:])   # the labels, exactly
+    assert set(orbit.state[12:]) <= {-1.0, 0.0, 1.0}
+
+
+def test_the_monodromy_in_the_continuous_states_is_their_difference_quotient_and_zero_in_the_labels():
+    model = _iwan_pair()
+    orbit = find_periodic_orbit(model, transient=100)
+    ig = make_integrator(model)
+    P = PeriodMap(ig, 1, jacobian="differences", workers=1)
+    d = ig.discrete_states
+    free = np.setdiff1d(np.arange(P.n), d)
+    J = orbit.monodromy
+    assert np.all(J[d] == 0.0) and np.all(J[:, d] == 0.0)
+    # each continuous column by central differences of the map, the labels held
+    D = np.empty((P.n, free.size))
+    for k, i in enumerate(free):
+        e = 1e-6 * orbit.scale[i]
+        yp, ym = orbit.state.copy(), orbit.state.copy()
+        yp[i] += e
+        ym[i] -= e
+        D[:, k] = (P(yp, orbit.mode)[0] - P(ym, orbit.mode)[0]) / (2 * e)
+    scaled = J[:, free] * orbit.scale[free][None, :] / orbit.scale[:, None]
+    assert np.max(np.abs(scaled - D * orbit.scale[free][None, :] / orbit.scale[:, None])) < 1e-6 * np.max(
+        np.abs(scaled))
+    assert np.count_nonzero(np.abs(orbit.multipliers) < 1e-12) >= d.size
+
+
+def test_a_continued_iwan_branch_keeps_its_labels_whole_and_matches_brute_force():
+    """Before, the branch from 280 rad/s stalled near 286.9 after 400 points, with multipliers of 5e5."""
+    branch = continuation(BladePair(friction="iwan"), "omega", 284.0, 290.0)
+    assert branch.message.startswith("reached")
+    assert np.max(np.abs(branch.multipliers)) < 1.0
+    labels = branch.states[:, 12:]
+    assert np.array_equal(labels, np.rint(labels))
+    for k in (0, len(branch.params) // 2, -1):
+        model = BladePair(friction="iwan", omega=float(branch.params[k])).build()
+        settled = simulate(model, periods=300, steps_per_period=1000).final_state[:12]
+        scale = np.max(np.abs(branch.states[:, :12]), axis=0)
+        assert_allclose(branch.states[k, :12] / scale, settled / scale, atol=1e-8)
+
+
+@pytest.mark.parametrize("blades", [4])
+def test_an_iwan_ring_orbit_is_found_from_a_short_transient(blades):
+    """A preloaded Iwan ring: a few periods from rest leave a residual Newton's method must take to tol
+    (before, no step along the Newton direction reduced it). The Jacobian is taken by differences (the
+    Iwan flow is not affine within a contact mode), none of them in a label."""
+    model = BladedDisk(blades=blades, engine_order=1, friction="iwan", gap=-1e-5, omega=280.0).build()
+    ig = make_integrator(model, kernel="contact")
+    orbit = find_periodic_orbit(model, transient=5, integrator=ig, workers=1)
+    assert orbit.history[0] > 1e-8 and orbit.history[-1] <= 1e-10
+    r = simulate(model, periods=400, kernel="contact")
+    n = orbit.state.size
+    free = np.setdiff1d(np.arange(n), ig.discrete_states)
+    scale = np.max(np.abs(orbit.y), axis=0)
+    assert_allclose(orbit.state[free] / scale[free], r.final_state[:n][free] / scale[free], atol=1e-8)
+
+
+class _DriftingLabel(FrictionLaw):
+    """A Coulomb-like law with a 'label' whose rate is not zero: refused."""
+
+    modes = ("slip",)
+    states = ("s",)
+    discrete_states = ("s",)
+
+    def __init__(self, rate=1, names=("s",)):
+        self._rate = rate
+        self.discrete_states = names
+
+    def parameters(self):
+        return {"mu": as_param(0.5, "mu", field="friction: mu")}
+
+    def force(self, mode, ctx):
+        return ctx.params["mu"] * ctx.N
+
+    def rates(self, mode, ctx):
+        return {"s": sp.Integer(self._rate) * ctx.v}
+
+    def guards(self, mode, ctx):
+        return []
+
+    def entry(self, ctx):
+
+        return [Candidate("slip")]
+
+
+def test_a_discrete_state_must_be_a_state_with_zero_rate():
+    with pytest.raises(FrictionLawError, match=r"rates\('slip', ctx\)\['s'\].*discrete_states"):
+        check_law(_DriftingLabel(rate=1))
+    with pytest.raises(FrictionLawError, match=r"discrete_states = \('q',\) names \['q'\]"):
+        check_law(_DriftingLabel(rate=0, names=("q",)))
+    check_law(_DriftingLabel(rate=0))
