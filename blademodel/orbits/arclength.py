@@ -298,6 +298,29 @@ def _travelling_wave(ctx, X, mode, name, at):
     return Xc, mc
 
 
+#: A step's grazing point whose location leaves a bracket this many times its tolerance wide was not located
+#: (its trials found no orbit inside): :func:`_passed_unseen`.
+UNSEEN_BRACKET = 1e3
+
+
+def _passed_unseen(found: list, ctx, locate_tol: float) -> bool:
+    """Whether a grazing point of a step (``found``, :meth:`~.corrector._Context.detect`'s) is left with a bracket
+    wider than :data:`UNSEEN_BRACKET` times its tolerance: located now (in this thread), where the location would
+    otherwise run beside the continuation. None where grazing points are not located (``grazing_tol = inf``)."""
+    tol = locate_tol if ctx.grazing_tol is None else float(ctx.grazing_tol)
+    pending = [q for q in found if isinstance(q, PendingPoint)]
+    if not pending or not np.isfinite(tol):
+        return False
+    widest = UNSEEN_BRACKET * tol * ctx.span
+    for q in pending:
+        located = q.located()
+        for at in (located if isinstance(located, list) else [located]):
+            bracket = at.get("bracket")
+            if bracket is not None and bracket[1] - bracket[0] > widest:
+                return True
+    return False
+
+
 def _check_grazing_tol(grazing_tol) -> None:
     """Raise ``ValueError`` unless ``grazing_tol`` is None or a number > 0 (``inf`` included)."""
     if grazing_tol is not None and not float(grazing_tol) > 0.0:
@@ -508,6 +531,15 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         else:
             found = ctx.detect(pts[-1], new, X, T, m, len(pts) - 1, locate_tol,
                                before=pts[-2] if len(pts) > 1 else None)
+        if secant and not (ahead or gap) and h / 2 >= ds_min and _passed_unseen(found, ctx, locate_tol):
+            # the step's grazing could not be bracketed from the last orbit: trials inside found no orbit
+            # there, so the branch does not run straight from one point to the next. Measured on the Coulomb
+            # pair at ds_max 0.15: a shot at a fixed value (the arclength corrections had failed) from 412.8
+            # to 427.2 rad/s landed past its S at 420.35-420.68 rad/s (two folds and the unstable arm
+            # between), with a grazing point bracketed in [419.2, 422.6] as the only trace. A shorter step
+            ctx.why = "the step's grazing point could not be located (the step passed a turn or a gap)"
+            h /= 2
+            continue
         off_circle = any(_at_kink(q) for q in found)
         retry = any(_off_circle(q) for q in found)
         T_away = None   # past a kink the new point lies on another arm: onward on it is away from the kink

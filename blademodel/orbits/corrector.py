@@ -812,8 +812,10 @@ class _Context:
             at_b = at["X"] is b["X"]
             if not at_b and at["signature"] == lo["signature"]:
                 break   # solved to tol, the point past the grazing fell back before it: that one is known
-            if not (found and not at_b and np.linalg.norm(at["X"] - X_lo) <= 2.0 * locate_tol):
-                found.append(at)   # (two changes closer than their locations' tolerance are one grazing point)
+            if not (found and not at_b and abs(float(at["X"][-1] - X_lo[-1])) <= 2.0 * locate_tol):
+                # (two changes closer in the field than their locations' tolerance, which bounds the field's
+                # bracket, are one grazing point)
+                found.append(at)
             if at_b or at["signature"] == b["signature"] or not _between(at["X"], X_lo, b["X"]):
                 break
             lo = {"X": at["X"], "A": a["A"], "signature": at["signature"]}
