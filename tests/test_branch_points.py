@@ -160,8 +160,26 @@ def test_a_tuned_ring_s_travelling_wave_gives_way_between_two_branch_points():
     # on the map over T / 4 turned by two blades (the reduced map period-doubles at the branch point): the same orbits
     reduced = branch_point_branch(cfg, "omega", bps[0], 315.0, 330.0, workers=1, max_points=12, cyclic=True)
     assert "whole ring" not in reduced.message and "whole ring" not in nb.message
-    np.testing.assert_allclose(reduced.params, nb.params, rtol=0, atol=1e-5)
-    np.testing.assert_allclose(reduced.harmonics, nb.harmonics, rtol=0, atol=1e-6 * np.abs(nb.harmonics).max())
+    # (compared as orbits, not point by point: the two step controls see the same curve through other rounding,
+    # and their points drift apart by 3e-2 rad/s within 12 points on one machine, agreeing to 1e-5 on another)
+    scale = np.max(np.abs(nb.states), axis=0)
+    for w, y in zip(reduced.params[1:], reduced.states[1:]):
+        P = PeriodMap(make_integrator(apply_overrides(cfg, {"omega": str(w)}).build()), 1, "differences", 1)
+        full = np.zeros(P.integrator.n_state)
+        full[:y.size] = y
+        assert np.max(np.abs(P(y, P.integrator.mode_of(full))[0] - y) / scale) < 1e-8   # an orbit of the whole ring
+    k = int(np.argmin(np.abs(reduced.params - nb.params[6])))
+    w = float(reduced.params[k])
+    j = int(np.argmin(np.abs(nb.params - w)))
+    from blademodel.orbits import find_periodic_orbit
+    whole = find_periodic_orbit(apply_overrides(cfg, {"omega": str(w)}).build(), guess=nb.states[j],
+                                mode=nb.modes[j], transient=0, workers=1)
+    # the same orbit up to which blade it is centred on (the crossing orbits break the travelling wave, and each
+    # turn of one is another of them): the blades' first harmonics, sorted
+    xs = [i for i, name in enumerate(nb.state_names) if name.startswith("x")]
+    found = np.sort(np.abs([whole.harmonic(nb.state_names[i]) for i in xs]))
+    assert np.max(np.abs(found - np.sort(np.abs(reduced.harmonics[k, xs])))) < 1e-6 * found[-1]
+    assert found[-1] - found[0] > 1e-4 * found[-1]   # (which would tell one blade from another)
     assert reduced.integrations < nb.integrations
     # followed on, the crossing branch ends where it passes the travelling waves again: at the other branch point
     on = branch_point_branch(cfg, "omega", bps[0], 315.0, 330.0, workers=1, cyclic=True)
@@ -178,7 +196,9 @@ def test_a_tuned_ring_s_travelling_wave_gives_way_between_two_branch_points():
     z = np.zeros(ig.n_state)
     z[:y.size] = y
     rec = ig.record_buffer(S + 1)
-    ig.advance(z, ig.mode_of(z), 0, 1, n_transient=0, record=rec)
+    # from the branch's own mode: the section state may lie on a switching boundary, where the mode the state
+    # alone reads is the other side's (measured on one machine: the turn by two blades then off by 2.5e-6)
+    ig.advance(z, np.array(nb.modes[j], dtype=np.int64), 0, 1, n_transient=0, record=rec)
     Y = rec[1][:, :sym.n]
     scale = np.max(np.abs(Y), axis=0)
 
