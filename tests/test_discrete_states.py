@@ -137,3 +137,37 @@ def test_a_discrete_state_must_be_a_state_with_zero_rate():
     with pytest.raises(FrictionLawError, match=r"discrete_states = \('q',\) names \['q'\]"):
         check_law(_DriftingLabel(rate=0, names=("q",)))
     check_law(_DriftingLabel(rate=0))
+
+
+def test_a_reset_within_one_mode_repeated_within_an_instant_counts_once_in_the_signature():
+    """The signature (a multiset of transitions) counts a law's reset that keeps its mode (an Iwan element's label)
+    once where it repeats within the kernel's event bracket; a transition that changes the mode, or one repeated
+    later, counts each time."""
+    from blademodel.orbits.period_map import MapRun
+    h = 1e-5
+    t = np.array([0.0, 0.6e-10 * h, 1.2e-10 * h, 0.3 * h, 0.5 * h, 0.5 * h + 1e-10 * h])
+    guard = np.array([0, 1, 1, 1, 2, 2])
+    frm = np.array([0, 1, 1, 1, 1, 2])
+    to = np.array([1, 1, 1, 1, 2, 1])
+    log = (t, guard, frm, to)
+    run = MapRun(start=None, mode=0, fired=[], end=None, mode_end=0, t=None, Y=None, states=None, log=log, n_log=6,
+                 events=6, instant=2e-10 * h)
+    assert run.signature() == ((0, 0, 1), (1, 1, 1), (1, 1, 1), (2, 1, 2), (2, 2, 1))
+    never = MapRun(start=None, mode=0, fired=[], end=None, mode_end=0, t=None, Y=None, states=None, log=log, n_log=6,
+                   events=6)
+    assert len(never.signature()) == 6
+
+
+def test_the_iwan_closing_cascade_does_not_read_as_grazing():
+    """At 283.3122 rad/s one stick->slip+ follows the contact's closing within its bracket, at 283.31225 two: 76
+    and 77 events a period, and the signatures differed, so that the branch reported a grazing point at nearly
+    every step there (148 from 280 to 320 rad/s). Over 283.3120 ... 283.3128 the orbits' signatures are one."""
+    signatures = set()
+    for omega in np.linspace(283.3120, 283.3128, 9):
+        model = _iwan_pair(float(omega))
+        ig = make_integrator(model)
+        orbit = find_periodic_orbit(model, transient=100, integrator=ig)
+        P = PeriodMap(ig, 1)
+        P(orbit.state, orbit.mode)
+        signatures.add(P.last_run.signature())
+    assert len(signatures) == 1
