@@ -165,7 +165,10 @@ def find_periodic_orbit(model, *, periods: int = 1, guess=None, mode=None, trans
     transient : int
         Periods integrated from rest (or from ``guess``) before the first step.
     tol : float
-        Converged when ``max |P(y) - y| / scale <= tol``.
+        Converged when ``max |P(y) - y| / scale <= tol`` and the friction laws' discrete
+        states (:attr:`~blademodel.components.friction.base.FrictionLaw.discrete_states`, an
+        Iwan element's label) come back exactly: they are held as part of the mode, not solved
+        for (:func:`~.period_map.hold_discrete`).
     max_iter : int
         Newton steps allowed.
     rel_step : float
