@@ -306,7 +306,7 @@ UNSEEN_BRACKET = 1e3
 def _passed_unseen(found: list, ctx, locate_tol: float) -> bool:
     """Whether a grazing point of a step (``found``, :meth:`~.corrector._Context.detect`'s) is left with a bracket
     wider than :data:`UNSEEN_BRACKET` times its tolerance: located now (in this thread), where the location would
-    otherwise run beside the continuation. None where grazing points are not located (``grazing_tol = inf``)."""
+    otherwise run beside the continuation. False where grazing points are not located (``grazing_tol = inf``)."""
     tol = locate_tol if ctx.grazing_tol is None else float(ctx.grazing_tol)
     pending = [q for q in found if isinstance(q, PendingPoint)]
     if not pending or not np.isfinite(tol):
