@@ -102,6 +102,29 @@ def test_an_iwan_ring_orbit_is_found_from_a_short_transient():
     assert_allclose(orbit.state[free] / scale[free], r.final_state[:n][free] / scale[free], atol=1e-8)
 
 
+def test_a_label_that_the_ring_s_turn_does_not_bring_back_is_no_travelling_wave():
+    """``CyclicSymmetry.comes_back`` counts a label that differs from the one it is turned onto as 1 (as
+    ``residual_size`` does): scaled by ``LABEL_SCALE`` it read as ``1e-12`` before, below ``WAVE_TOL``."""
+    from blademodel.orbits.cyclic import CyclicSymmetry
+    from blademodel.orbits.shooting import _scale_of_excursions
+    # engine order 2 on 4 blades: the reduced map covers T / 2, and a period's two turns bring each blade's
+    # state onto the blade two places on (for engine order 1 they would bring it back onto itself)
+    cfg = BladedDisk(blades=4, engine_order=2, friction="iwan", gap=-1e-5, omega=280.0)
+    ig = make_integrator(cfg.build(), kernel="contact")
+    sym = CyclicSymmetry(cfg, ig)
+    assert not np.array_equal(sym._powers[-1], np.arange(ig.n_physical))
+    n, d = ig.n_physical, ig.discrete_states
+    y = np.zeros(n)
+    free = np.setdiff1d(np.arange(n), d)
+    y[free] = 1e-6   # every blade alike: any turn brings the state back
+    scale = _scale_of_excursions(np.full(n, 1e-6), 0, d)
+    assert sym.comes_back(y, scale) == 0.0
+    y[d[0]] = 1.0   # one element of one contact slips, the contact two places on sticks
+    assert sym.comes_back(y, scale) >= 1.0
+    y[d] = 1.0      # all alike again
+    assert sym.comes_back(y, scale) == 0.0
+
+
 class _DriftingLabel(FrictionLaw):
     """A Coulomb-like law with a 'label' whose rate is not zero: refused."""
 

@@ -97,6 +97,7 @@ class CyclicSymmetry:
                               f"covers T / {self.fraction} in whole steps (--steps-per-period "
                               f"{-(-S // self.fraction) * self.fraction} would do)")
         self.n = int(integrator.n_physical)
+        self.discrete = np.asarray(getattr(integrator, "discrete_states", ()), dtype=np.int64)   # the laws' labels
         self.index = _turned(list(integrator.meta["state"])[:self.n], N, self.turn)        # states
         self.contact_index = _turned(list(integrator.meta["contacts"]), N, self.turn)    # contact modes
         # the slot each entry reaches after k turns, k = 0 .. d: rows of powers of the turn
@@ -147,9 +148,20 @@ class CyclicSymmetry:
 
     def comes_back(self, y: np.ndarray, scale: np.ndarray) -> float:
         """How far ``S^(s d periods) y`` lies from ``y`` (the largest difference over ``scale``): zero for a fixed
-        point of the reduced map that is an orbit of ``periods`` excitation periods."""
+        point of the reduced map that is an orbit of ``periods`` excitation periods.
+
+        At least 1 where a friction law's discrete state (an Iwan element's label) differs from
+        the one it is turned onto, as :func:`~blademodel.orbits.shooting.residual_size` counts
+        it: scaled by :data:`~blademodel.orbits.shooting.LABEL_SCALE`, a label that differs by
+        1 would otherwise read as ``1e-12``.
+        """
         y = np.asarray(y)[:self.n]
-        return float(np.max(np.abs(y[self._powers[-1]] - y) / scale))
+        turned = y[self._powers[-1]]
+        off = float(np.max(np.abs(turned - y) / scale))
+        d = self.discrete
+        if d.size and np.any(np.rint(turned[d]) != np.rint(y[d])):
+            return max(off, 1.0)
+        return off
 
     # --- the orbit over a whole period --------------------------------------------------------
     def whole_period(self, Y: np.ndarray) -> np.ndarray:
