@@ -687,6 +687,38 @@ def test_a_correction_that_lands_on_the_branch_already_passed_is_refused(monkeyp
     assert abs(b.params.size - plain.params.size) <= 2
 
 
+def test_a_landing_between_two_points_passed_counts_as_on_the_part_passed():
+    """``_passed``, which refuses a correction that converged far from its prediction onto the branch already
+    passed, looks at the polyline through the points, not only at the points: where the steps have shrunk (toward a
+    kink) a landing between two points lies farther than the step from both. The bilinear pair down from 600 rad/s
+    at ``ds_max = 0.03`` shrank its steps toward 261.428 rad/s and from 261.432, at a step of ``6.3e-3``, landed at
+    266.069, between points 0.1 rad/s apart, then went over that stretch again and stopped (a branch come round onto
+    itself); the slow test below runs that branch. Here: points on a circle's arc, in the unknowns as the continuation scales them."""
+    from types import SimpleNamespace
+    from blademodel.orbits.arclength import _passed
+    ctx = SimpleNamespace(unknowns=lambda q: q["X"])
+    angles = np.linspace(0.0, 1.0, 11)   # segments 0.1 long on a unit circle: sagitta 1.25e-3, under NEAR * 0.1
+    pts = [{"X": np.array([np.cos(a), np.sin(a), 0.0])} for a in angles]
+    between = np.array([np.cos(0.55), np.sin(0.55), 0.0])   # on the arc, 0.05 from its neighbours
+    assert _passed(ctx, pts, between, 1e-3)                 # (before: only within the step, 1e-3, of a point)
+    assert _passed(ctx, pts, pts[4]["X"] + 5e-4, 1e-3)      # near a point, as before
+    off = np.array([1.1 * np.cos(0.55), 1.1 * np.sin(0.55), 0.0])   # 0.1 off the arc: another branch
+    assert not _passed(ctx, pts, off, 1e-3)
+    assert not _passed(ctx, pts, np.array([np.cos(1.3), np.sin(1.3), 0.0]), 1e-3)   # on the circle, past the points
+    assert not _passed(ctx, [], between, 1.0)
+
+
+@pytest.mark.slow
+def test_the_bilinear_pair_down_from_600_at_ds_max_0_03_gets_through():
+    """The branch of the test above, whole (on the machine where the steps shrank toward 261.428 rad/s; the path
+    depends on rounding): it reaches its end with its period doublings, and its field never jumps back up by more
+    than a step."""
+    b = continuation(BladePair(friction="bilinear"), "omega", 600.0, 150.0, ds_max=0.03, max_points=3000, workers=1)
+    assert b.message == "reached omega = 150"
+    assert sum(q.kind == "period-doubling" for q in b.special) == 10
+    assert np.max(np.diff(b.params)) < 1.0
+
+
 def _no_orbits_between(monkeypatch, lo, hi):
     """Make every residual and every shot at a value of the field in ``(lo, hi)`` fail: a stretch with no orbit."""
     from blademodel.orbits import arclength as al
