@@ -30,6 +30,12 @@ relative, is far below what a difference quotient of the whole map resolves). A
 mode whose flow is not affine (a law whose force is nonlinear within a mode) is
 found by a probe and refused (:class:`ContactTangentError`): the period map then
 falls back to differences.
+
+A law with labels (the Iwan elements' modes, ``discrete_states``) is affine for given
+labels: the matrices are kept by mode and labels, nothing is differentiated in a label
+(their rows and columns are held), and its resets are taken as the kernel decided them
+(:meth:`ContactTangent._reset_jacobian`): past the guard's root, with the labels the
+record shows, differentiated with those decisions fixed.
 """
 
 from __future__ import annotations
@@ -68,7 +74,7 @@ def _caches(integrator) -> dict:
     c = _CACHES.pop(key, None) or {"A": _Kept(KEEP_BYTES), "gy": _Kept(KEEP_BYTES // 8),
                                    "blocks": _Kept(KEEP_BYTES // 8), "clusters": _Kept(KEEP_BYTES // 8),
                                    "checked": set(), "projections": _Kept(KEEP_BYTES // 8), "pattern": [],
-                                   "ungrouped": set()}
+                                   "ungrouped": set(), "resets": _Kept(KEEP_BYTES // 8)}
     _CACHES[key] = c
     while len(_CACHES) > _KEEP:
         _CACHES.popitem(last=False)
@@ -130,13 +136,19 @@ class ContactTangent:
         self._stick_table = (mod.IS_STICK != 0) & (np.arange(mod.IS_STICK.shape[1])[None, :] == mod.RIGID[:, :1])
         self._ungrouped: set = caches["ungrouped"]   # modes whose grouped A failed the probe: built column by column
         self._checked: set = caches["checked"]   # modes whose kept matrix was checked for affinity
+        #: the friction laws' discrete states (labels, held: :func:`~blademodel.orbits.period_map.hold_discrete`),
+        #: by contact; a mode's flow is affine for given labels, so its matrices are kept by mode and labels
+        self._labels = np.asarray(getattr(integrator, "discrete_states", ()), dtype=np.int64)
         self._probe = np.random.default_rng(0).uniform(-1.0, 1.0, self.n)
+        self._probe[self._labels] = 0.0   # a probe moves no label (a label a little off 0 reads as slip)
         self._factored = None   # the contact modes the stick problem in the work arrays is factored for
         self._blocks, self._cluster_sets, self._projections = caches["blocks"], caches["clusters"], caches["projections"]
+        self._resets = caches["resets"]   # labelled laws' reset Jacobians, by contact, guard, mode and labels
         self._R = _Kept(KEEP_BYTES // 8)   # the step matrices R(hA) of this integrator's step
         self._powers = _Kept(KEEP_BYTES // 8)   # their powers, for runs of whole steps without events
         self._G = np.zeros_like(integrator.GS[0])
         self._rows = [self._contact_rows(j) for j in range(self.nc)]
+        self._contact_labels = [np.intersect1d(self._law_rows(j), self._labels) for j in range(self.nc)]
         self._tableau = tuple(np.ascontiguousarray(x, dtype=float) for x in (method.A, method.b, method.c))
         s, ns = self._b.size, integrator.n_state
         # the compiled sub-step's work arrays: stages (full rows), their derivatives (cluster rows), states
@@ -148,6 +160,17 @@ class ContactTangent:
         """The state rows of contact ``j``'s coordinates: positions, then velocities."""
         q = sorted({int(i) for i in self.tables.cidx[j] if i >= 0})
         return q + [self.nq + i for i in q]
+
+    def _law_rows(self, j: int) -> np.ndarray:
+        """The state rows of contact ``j``'s law states."""
+        return np.arange(int(self.mod.NSTATES[int(self.tables.claw[j])])) + 2 * self.nq + int(self.tables.cso[j])
+
+    def _key(self, cm, y) -> bytes:
+        """What a mode's kept matrices are keyed by: its contact modes, and the labels of ``y`` where the laws have
+        any."""
+        if not self._labels.size:
+            return cm.tobytes()
+        return cm.tobytes() + np.rint(y[self._labels]).astype(np.int8).tobytes()
 
     def _factor(self, cm) -> None:
         """The stick problem of ``cm`` factored in the work arrays (once for consecutive calls in one mode)."""
@@ -187,29 +210,30 @@ class ContactTangent:
     def flow_matrix(self, cm, y) -> np.ndarray:
         """``A = df/dy`` of the physical states in the contact modes ``cm`` (kept per mode).
 
-        Built from ``n + 1`` calls of ``rhs`` at the zero state. Before its first use
+        Built from ``n + 1`` calls of ``rhs`` at the zero state (with ``y``'s labels, where the laws have any:
+        kept by mode and labels, its labels' rows and columns zero). Before its first use
         (for these values, whatever the excitation frequency: the check is kept with
         ``A``) the flow's change along a probe direction at ``y`` (a state where the
         mode holds) is checked against ``A``: a mode that is not affine (a friction law
         whose force is not linear within a mode) raises :class:`ContactTangentError`.
         """
-        key = cm.tobytes()
+        key = self._key(cm, y)
         A = self._A.get(key)
         if A is None:
-            A = self._A[key] = self._build_flow_matrix(cm)
+            A = self._A[key] = self._build_flow_matrix(cm, y)
         if key not in self._checked:
             agrees = self._flow_agrees(A, cm, y)
             if not agrees and self._pattern is not None and key not in self._ungrouped:
                 # a pattern that missed an entry reads it into another column: take every column on its own
                 self._ungrouped.add(key)
-                A = self._A[key] = self._build_flow_matrix(cm)
+                A = self._A[key] = self._build_flow_matrix(cm, y)
                 agrees = self._flow_agrees(A, cm, y)
             if not agrees:
                 raise ContactTangentError(f"the flow in contact modes {cm.tolist()} is not affine in the state")
             self._checked.add(key)
         return A
 
-    def _build_flow_matrix(self, cm):
+    def _build_flow_matrix(self, cm, y):
         """``A`` of ``cm``: from :data:`GROUPED_FROM` states on sparse, by column groups of the model's pattern
         (:mod:`.contact_flow_pattern`) unless there is none or it missed an entry; else dense, column by column."""
         from scipy.sparse import csr_matrix
@@ -217,23 +241,29 @@ class ContactTangent:
         z, out = np.zeros(ig.n_state), np.empty(ig.n_state)
         self._factor(cm)   # once: nothing below uses the work arrays for another mode
         rhs, args = self.mod.rhs, (cm, ig.I, ig.R, ig.WI, ig.WF, out)
+        labels = self._labels
+        base = np.zeros(n)
+        base[labels] = np.rint(np.asarray(y)[labels])   # the zero state with y's labels (none moved below)
 
-        def flow(y):
-            z[:n] = y
+        def flow(v):
+            z[:n] = v
+            z[labels] = 0.0
+            z[:n] += base
             rhs(0.0, z, *args)
+            out[labels] = 0.0
             return out[:n].copy()
 
         entries = None
-        if self._pattern is not None and cm.tobytes() not in self._ungrouped:
+        if self._pattern is not None and self._key(cm, y) not in self._ungrouped:
             entries = grouped_flow_matrix(flow, n, *self._pattern.groups(self._sticking(cm)))
         if entries is None:
-            y = np.zeros(n)
-            f0 = flow(y)
+            v = np.zeros(n)
+            f0 = flow(v)
             A = np.empty((n, n))
             for i in range(n):
-                y[i] = 1.0
-                A[:, i] = flow(y) - f0
-                y[i] = 0.0
+                v[i] = 1.0
+                A[:, i] = flow(v) - f0
+                v[i] = 0.0
             return csr_matrix(A) if self._large else A
         rows, cols, values = entries
         return csr_matrix((values, (rows, cols)), shape=(n, n))
@@ -250,7 +280,7 @@ class ContactTangent:
     def _block(self, cm, y, rows) -> np.ndarray:
         """``A``'s block on ``rows`` in the mode ``cm`` (kept, as ``A`` is)."""
         A = self.flow_matrix(cm, y)
-        key = (cm.tobytes(), rows.tobytes())
+        key = (self._key(cm, y), rows.tobytes())
         Ar = self._blocks.get(key)
         if Ar is None:
             sub = A[rows][:, rows].toarray() if hasattr(A, "toarray") else A[np.ix_(rows, rows)]
@@ -260,7 +290,7 @@ class ContactTangent:
     def _step_matrix(self, h: float, cm, y, rows=None) -> np.ndarray:
         """``R(hA)`` of the mode ``cm`` (``y``: a state where it holds), or its block of ``rows``."""
         if rows is None:
-            key = (h, cm.tobytes())
+            key = (h, self._key(cm, y))
             M = self._R.get(key)
             if M is None:
                 M = self._R[key] = stability_matrix(h * self.flow_matrix(cm, y), self._poly)
@@ -271,7 +301,8 @@ class ContactTangent:
         """``R(hA)^m`` of the mode ``cm``: ``m`` whole steps (kept, with the powers of two it is made of)."""
         if m == 1:
             return self._step_matrix(h, cm, y)
-        key = (h, cm.tobytes(), m)
+        mk = self._key(cm, y)
+        key = (h, mk, m)
         P = self._powers.get(key)
         if P is None:
             base, e, b = self._step_matrix(h, cm, y), m, 1
@@ -281,9 +312,9 @@ class ContactTangent:
                 e >>= 1
                 if e:
                     b *= 2
-                    square = self._powers.get((h, cm.tobytes(), b))
+                    square = self._powers.get((h, mk, b))
                     if square is None:
-                        square = self._powers[(h, cm.tobytes(), b)] = base @ base
+                        square = self._powers[(h, mk, b)] = base @ base
                     base = square
             self._powers[key] = P
         return P
@@ -322,13 +353,20 @@ class ContactTangent:
         (the joint stick forces of a closed ring make a guard piecewise affine) it is taken
         by central differences at ``y``, and not kept.
         """
-        key = (cm.tobytes(), int(j), int(gi))
-        gy = self._gy.get(key)
-        if gy is None:
-            self._gy[key] = gy = self._guard_gradient_at_zero(cm, j, gi)
         ig = self.ig
         steps = 1e-6 * np.maximum(np.abs(y[rows]), 1e-3 * np.max(np.abs(y[rows])))
         cols = np.empty(rows.size)
+        if self._contact_labels[j].size:
+            # a law with labels: its guards are the least over its elements (the Iwan law's), whose gradient is
+            # the element's that crosses; a gradient kept from the zero state, whose labels are all zero, is
+            # another's, and the probe along which it is checked moves the contact's two sides alike (their
+            # relative velocity not at all). Central differences at y, row by row
+            gy = np.full(self.n, np.nan)
+        else:
+            key = (cm.tobytes(), int(j), int(gi))
+            gy = self._gy.get(key)
+            if gy is None:
+                self._gy[key] = gy = self._guard_gradient_at_zero(cm, j, gi)
         self._factor(cm)
         gt, kept = self.mod.guard_derivatives(float(t), y, cm, int(j), int(gi), rows, steps, 1e-6 * H, gy[rows],
                                               ig.I, ig.R, ig.WI, ig.WF, self._G, self._work[4], cols)
@@ -372,13 +410,45 @@ class ContactTangent:
     def _rigid_stick(self, j: int, m: int) -> bool:
         return bool(self._stick_table[self.tables.claw[j], m])
 
-    def _reset_jacobian(self, t, y, cm, j, gi, rows):
+    def _past_root(self, t, y, cm, j, gi, K):
+        """``y``, or where contact ``j``'s guard ``gi`` has not yet crossed there, ``y`` a little farther along the
+        flow, where it has.
+
+        The kernel fires a transition at the far end of its event's bracket, past the guard's root (by at most its
+        ``event_tol``), and a law with labels (the Iwan elements' modes) decides them there from the state: the
+        element whose guard crossed slips. The replay's state at the logged time can lie a rounding error short of
+        the root (``5e-15`` of the state on a 4-blade ring), where the same reset keeps the element stuck; moved
+        along the flow by ``1e-14`` of a step or more, far less than the bracket, it decides as the kernel did.
+        A guard that has not crossed within ``1e-8`` of a step was fired short of its root, with another contact's
+        event (:func:`~blademodel.numeric.contact_guards.mark_near`): ``y`` as it is.
+        """
+        d = int(self.mod.GDIR[K, int(cm[j]), int(gi)])
+        g = self._guard(t, y, cm, j, gi)
+        if d == 0 or (d < 0 and g < 0.0) or (d > 0 and g > 0.0):
+            return y
+        rate = self._rhs(t, y, cm)
+        h = self.ig.period / self.ig.steps_per_period
+        for k in range(14, 7, -1):
+            moved = y + (10.0 ** -k * h) * rate
+            g = self._guard(t + 10.0 ** -k * h, moved, cm, j, gi)
+            if (d < 0 and g < 0.0) or (d > 0 and g > 0.0):
+                return moved
+        return y   # fired short of its root with another contact's event (``mark_near``): the reset decides there
+
+    def _reset_jacobian(self, t, y, cm, j, gi, rows, target=None):
         """``d y+ / d y`` of contact ``j``'s transition by guard ``gi`` at ``y`` and the state after it; ``None`` and
         ``y`` where the contact's law has no state to reset.
 
         A transition writes its contact's law states only: the Jacobian is the identity
         but for their rows, central differences of the transition in the cluster's
         ``rows`` (what those states can depend on).
+
+        A law with labels (the Iwan elements' modes) decides them from the state, at the guard's root: the
+        replay's state there and the kernel's differ by rounding, and a difference step moves the guard across
+        its root. ``target``, the contact's labels after the transition as the kernel set them (where known),
+        fixes the decision: the state after is taken with those labels, and a column whose central difference
+        straddles the decision is a one-sided difference on the side that keeps it (exact to rounding: with its
+        decisions fixed the reset is affine). The labels' own rows and columns are zero (held).
         """
         ig = self.ig
         K = int(self.tables.claw[j])
@@ -393,13 +463,76 @@ class ContactTangent:
             return yy
 
         n = self.n
-        own = np.arange(n_states) + 2 * self.nq + int(self.tables.cso[j])
-        cols = np.union1d(rows, own)
+        own = self._law_rows(j)
+        labels = self._contact_labels[j]
+        cols = np.setdiff1d(np.union1d(rows, own), labels)
+        free = np.setdiff1d(own, labels)
         steps = 1e-6 * np.maximum(np.abs(y[cols]), 1e-3 * max(float(np.max(np.abs(y[:n]))), 1e-300))
         Rj = np.eye(n)
         Rj[own] = 0.0
-        Rj[np.ix_(own, cols)] = self._columns(lambda z: fire(z)[own], y, cols, steps)
-        return Rj, fire(y)
+        if labels.size:
+            y = self._past_root(t, y, cm, j, gi, K)
+        after = fire(y)
+        if not labels.size:
+            Rj[np.ix_(free, cols)] = self._columns(lambda z: fire(z)[free], y, cols, steps)
+            return Rj, after
+        if target is None:
+            target = after[labels].copy()
+        target = np.asarray(target, dtype=float)
+        if not np.array_equal(after[labels], target):
+            raise ContactTangentError(f"the transition of contact {j} at t = {t:.9g} sets other labels than the "
+                                      f"kernel did")
+        after[labels] = target
+        # with its labels fixed the reset is affine (an element that sticks takes the stretch of its slip force,
+        # affine in the contact's normal state; the others keep theirs): its block is kept for these labels
+        key = (int(j), int(gi), int(cm[j]), np.rint(y[labels]).astype(np.int8).tobytes(),
+               target.astype(np.int8).tobytes(), cols.tobytes())
+        block = self._resets.get(key)
+        if block is None:
+            block = np.empty((free.size, cols.size))
+            for c, (i, e) in enumerate(zip(cols, steps)):
+                block[:, c] = self._decided_column(fire, y, i, e, labels, target, free, j, t)
+            self._resets[key] = block
+        Rj[np.ix_(free, cols)] = block
+        return Rj, after
+
+    @staticmethod
+    def _decided_column(fire, y, i, e, labels, target, free, j, t) -> np.ndarray:
+        """The column ``i`` of the reset ``fire``'s rows ``free`` at ``y``, its labels held at ``target``.
+
+        The central difference of step ``e`` where both sides keep those labels; a one-sided one on the side
+        that does where only one does (the reset is affine for fixed labels, so either is exact to rounding).
+        Where neither does (at an Iwan contact's closing every element's guard is zero, and any step sends all
+        of them to slip or none), the central difference still holds where the rows do not depend on the labels
+        the steps set: the one-sided differences either side agree (an element that starts to slip keeps its
+        stretch, whatever the others do). Else at steps a hundred times shorter, then an error.
+        """
+        base = fire(y)[free]
+        for scale in (1.0, 1e-2, 1e-4):
+            step = e * scale
+            sides = []
+            for way in (1.0, -1.0):
+                yy = y.copy()
+                yy[i] += way * step
+                out = fire(yy)
+                sides.append((np.array_equal(out[labels], target), out[free]))
+            (keep_p, fp), (keep_m, fm) = sides
+            if keep_p and keep_m:
+                return (fp - fm) / (2 * step)
+            if keep_p or keep_m:
+                way = 1.0 if keep_p else -1.0
+                yy = y.copy()
+                yy[i] += 2 * way * step
+                out = fire(yy)
+                if np.array_equal(out[labels], target):
+                    return way * (out[free] - (fp if keep_p else fm)) / step
+                continue
+            up, down = fp - base, base - fm
+            if np.max(np.abs(up - down)) <= 1e-9 * max(float(np.max(np.abs(up) + np.abs(down))), 1e-300) + \
+                    4.0 * np.finfo(float).eps * float(np.max(np.abs(base))):
+                return (fp - fm) / (2 * step)
+        raise ContactTangentError(f"the transition of contact {j} at t = {t:.9g} decides its labels otherwise than "
+                                  f"the kernel on both sides of its state")
 
     def _projection_block(self, contacts, rows) -> np.ndarray:
         """:meth:`_projection`'s block on ``rows`` (kept: it depends on the geometry and the masses only)."""
@@ -423,7 +556,7 @@ class ContactTangent:
         """``(rows, contacts)`` of each cluster of the event contacts ``seeds`` in a step through ``modes``: the
         state rows that the modes' ``A`` and the contacts' own coordinates couple to them, transitively, and the
         contacts whose coordinates are among them (kept by the modes and seeds)."""
-        key = (b"".join(cm.tobytes() for cm in modes), seeds)
+        key = (b"".join(self._key(cm, y) for cm in modes), seeds)
         found = self._cluster_sets.get(key)
         if found is not None:
             return found
@@ -510,7 +643,8 @@ class ContactTangent:
             Vn = self._step_matrix(H, cm0, rec_y[k]) @ V
             for rows, contacts in self._clusters(modes, seeds, rec_y[k]):
                 events = [i for i in order if int(lc[i]) in contacts]
-                Vn[rows] = self._cluster_step(V[rows], rows, contacts, events, log, t0, t1, rec_y[k], cm0, H)
+                Vn[rows] = self._cluster_step(V[rows], rows, contacts, events, log, t0, t1, rec_y[k], cm0, H,
+                                              rec_y[k + 1])
             V = Vn
             k += 1
         return V
@@ -543,14 +677,16 @@ class ContactTangent:
                                             range(self.nc))
         return D
 
-    def _through_transitions(self, V, t, y, cm, group, rows, contacts):
+    def _through_transitions(self, V, t, y, cm, group, rows, contacts, targets=None):
         """``V`` (on ``rows``) taken through the transitions ``group`` at ``(t, y)`` from the modes ``cm``: each
         ``(contact, guard, to)``'s reset (``guard`` ``-1``: a mode the friction problem set, no reset), then the
-        stick projection of ``contacts`` where one of them starts to stick. Returns ``(V, y, modes)`` after them."""
+        stick projection of ``contacts`` where one of them starts to stick. Returns ``(V, y, modes)`` after them.
+        ``targets``: by contact, its labels after its transitions as the kernel set them, where known."""
         cm2 = cm.copy()
         for j, gi, to in group:
             if gi >= 0:
-                Rj, y = self._reset_jacobian(t, y, cm2, j, gi, rows)
+                target = None if targets is None else targets.get(j)
+                Rj, y = self._reset_jacobian(t, y, cm2, j, gi, rows, target)
                 if Rj is not None:
                     V = Rj[np.ix_(rows, rows)] @ V
             cm2[j] = to
@@ -559,10 +695,15 @@ class ContactTangent:
             V = self._projection_block(stick, rows) @ V
         return V, y, cm2
 
-    def _cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H):
+    def _cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1=None):
         """The rows ``rows`` of a step's tangent through the cluster's ``events`` (log indices, in time order);
-        ``in_cluster``: the contacts whose coordinates are in ``rows``."""
+        ``in_cluster``: the contacts whose coordinates are in ``rows``. ``y1``: the kernel's state at the step's end,
+        whose labels are those each contact's last transition in the step set."""
         lt, lc, lg, lf, lto = log
+        last = {}
+        if y1 is not None and self._labels.size:
+            for i in events:
+                last[int(lc[i])] = float(lt[i])
         n = self.n
         cm = cm0.copy()
         ta, ya = t0, y0.copy()
@@ -586,7 +727,10 @@ class ContactTangent:
                 if rate == 0.0 or not np.isfinite(rate):
                     raise ContactTangentError(f"a grazing event at t = {te:.9g} (its guard has no rate)")
                 dtb = -(gy[rows] @ W) / rate
-            Vc, ye, cm2 = self._through_transitions(W + np.outer(Ph, dtb), te, ye, cm, group, rows, in_cluster)
+            targets = {j: y1[self._contact_labels[j]] for j, _, _ in group
+                       if j in last and last[j] == te and self._contact_labels[j].size}
+            Vc, ye, cm2 = self._through_transitions(W + np.outer(Ph, dtb), te, ye, cm, group, rows, in_cluster,
+                                                    targets)
             ta, ya, cm, dta = te, ye, cm2, dtb
         _, Pt, Ph = self._substep_derivatives(ta, ya, t1 - ta, cm, H, rows)
         return self._step_matrix(t1 - ta, cm, ya, rows) @ Vc + np.outer(Pt - Ph, dta)
