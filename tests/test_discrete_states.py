@@ -89,8 +89,8 @@ def test_a_continued_iwan_branch_keeps_its_labels_whole_and_matches_brute_force(
 
 def test_an_iwan_ring_orbit_is_found_from_a_short_transient():
     """A preloaded Iwan ring: a few periods from rest leave a residual Newton's method must take to tol
-    (before, no step along the Newton direction reduced it). The Jacobian is taken by differences (the
-    Iwan flow is not affine within a contact mode), none of them in a label."""
+    (before, no step along the Newton direction reduced it). The Jacobian is the replayed tangent (the Iwan
+    flow is affine for given labels), nothing of it in a label."""
     model = BladedDisk(blades=4, engine_order=1, friction="iwan", gap=-1e-5, omega=280.0).build()
     ig = make_integrator(model, kernel="contact")
     orbit = find_periodic_orbit(model, transient=5, integrator=ig, workers=1)
