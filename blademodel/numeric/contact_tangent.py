@@ -149,6 +149,12 @@ class ContactTangent:
         self._G = np.zeros_like(integrator.GS[0])
         self._rows = [self._contact_rows(j) for j in range(self.nc)]
         self._contact_labels = [np.intersect1d(self._law_rows(j), self._labels) for j in range(self.nc)]
+        # with labels, the replay carries the continuous states only: no matrix couples them to a label (its rows
+        # and columns are zero), and the labels' block is held (a third of an Iwan ring's states, so the products
+        # cost (2/3)^3 of the whole)
+        self._continuous = np.setdiff1d(np.arange(self.n), self._labels)
+        self._local = np.full(self.n, -1, dtype=np.int64)
+        self._local[self._continuous] = np.arange(self._continuous.size)
         self._tableau = tuple(np.ascontiguousarray(x, dtype=float) for x in (method.A, method.b, method.c))
         s, ns = self._b.size, integrator.n_state
         # the compiled sub-step's work arrays: stages (full rows), their derivatives (cluster rows), states
@@ -607,7 +613,12 @@ class ContactTangent:
     def _monodromy(self, rec_t, rec_y, rec_cm, log, n_log: int) -> np.ndarray:
         n = self.n
         lt, lc, lg, lf, lto = log
-        V = np.eye(n)
+        c, loc = (self._continuous, self._local) if self._labels.size else (None, np.arange(n))
+
+        def kept(M):   # a matrix of the whole state on the states V carries
+            return M if c is None else M[np.ix_(c, c)]
+
+        V = np.eye(n if c is None else c.size)
         ie = 0
         H = float(rec_t[1] - rec_t[0])
         self.ig._clear_near_marks()   # guards without the kernel's offsets for early-fired contacts
@@ -623,7 +634,7 @@ class ContactTangent:
                 while j < steps and not (ie < n_log and lt[ie] <= rec_t[j + 1]) and np.array_equal(rec_cm[j],
                                                                                                    rec_cm[k]):
                     j += 1
-                V = self._step_power(H, cm0, rec_y[k], j - k) @ V
+                V = kept(self._step_power(H, cm0, rec_y[k], j - k)) @ V
                 k = j
                 continue
             i0 = ie
@@ -640,14 +651,18 @@ class ContactTangent:
             if not np.array_equal(cmx, rec_cm[k + 1]):
                 raise ContactTangentError(f"the event log disagrees with the record at t = {t1:.9g}")
             seeds = tuple(sorted({int(lc[i]) for i in order}))
-            Vn = self._step_matrix(H, cm0, rec_y[k]) @ V
+            Vn = kept(self._step_matrix(H, cm0, rec_y[k])) @ V
             for rows, contacts in self._clusters(modes, seeds, rec_y[k]):
                 events = [i for i in order if int(lc[i]) in contacts]
-                Vn[rows] = self._cluster_step(V[rows], rows, contacts, events, log, t0, t1, rec_y[k], cm0, H,
-                                              rec_y[k + 1])
+                Vn[loc[rows]] = self._cluster_step(V[loc[rows]], rows, contacts, events, log, t0, t1, rec_y[k], cm0,
+                                                   H, rec_y[k + 1])
             V = Vn
             k += 1
-        return V
+        if c is None:
+            return V
+        M = np.zeros((n, n))
+        M[np.ix_(c, c)] = V
+        return M
 
     def settle_jacobian(self, y, cm, events) -> np.ndarray:
         """``d y+ / d y`` of the transitions a start state's settling fired at ``t = 0``
@@ -704,10 +719,9 @@ class ContactTangent:
         if y1 is not None and self._labels.size:
             for i in events:
                 last[int(lc[i])] = float(lt[i])
-        n = self.n
         cm = cm0.copy()
         ta, ya = t0, y0.copy()
-        dta = np.zeros(n)
+        dta = np.zeros(Vc.shape[1])
         q = 0
         while q < len(events):
             te = float(lt[events[q]])
@@ -720,7 +734,7 @@ class ContactTangent:
             W = self._step_matrix(te - ta, cm, ya, rows) @ Vc + np.outer(Pt - Ph, dta)
             fired = next(((j, gi) for j, gi, _ in group if gi >= 0), None)
             if fired is None:
-                dtb = np.zeros(n)
+                dtb = np.zeros(Vc.shape[1])
             else:
                 gy, gt = self._guard_gradient(te, ye, cm, *fired, rows, H)
                 rate = gt + float(gy[rows] @ Ph)
