@@ -185,6 +185,40 @@ def test_the_iwan_ring_s_tangent_holds_the_labels_the_kernel_set():
     assert P.replays == 1
 
 
+def test_a_reset_that_decides_otherwise_than_the_kernel_is_taken_a_little_farther_along_the_flow():
+    """Where the kernel read a guard from the boundary (a drifted transition's offset) and fired it while the reset,
+    which decides from the raw state, would not yet (the 24-blade ring from 290 to 300 rad/s: an element that stops
+    slipping, at 4 of 183 points, which then fell back to differences), the replay moves the state along the flow,
+    by ``1e-14`` of a step and ten times more each try, until the reset sets the labels the kernel set; it says so
+    where it never does within ``1e-8`` of a step. Here a stand-in reset whose decision flips ``3e-12`` of a step
+    along the flow."""
+    from blademodel.numeric.contact_tangent import ContactTangent, ContactTangentError
+    ig, orbit = _iwan_ring_orbit()
+    ct = ContactTangent(ig)
+    y = np.zeros(ig.n_state)
+    y[:ig.n_physical] = orbit.state
+    cm = orbit.mode.copy()
+    labels = ct._contact_labels[0]
+    rate = ct._rhs(0.0, y, cm)
+    h = ig.period / ig.steps_per_period
+    i = int(np.argmax(np.abs(rate[:ig.n_physical])))   # a state the flow moves
+    flip = y[i] + 3e-12 * h * rate[i]
+
+    def fire(state):
+        out = state.copy()
+        out[labels] = 0.0
+        out[labels[0]] = 1.0 if (state[i] - flip) * rate[i] >= 0 else 0.0   # slips once past the flip
+        return out
+
+    target = np.zeros(labels.size)
+    target[0] = 1.0
+    moved, after = ct._as_the_kernel(fire, 0.0, y, cm, labels, target, 0)
+    assert np.array_equal(after[labels], target)
+    assert 3e-12 * h <= (moved[i] - y[i]) / rate[i] <= 1e-10 * h   # the first try past the flip (1e-11 of a step)
+    with pytest.raises(ContactTangentError, match="sets other labels than the kernel did"):
+        ct._as_the_kernel(fire, 0.0, y, cm, labels, np.zeros(labels.size) + 2.0, 0)
+
+
 @pytest.mark.slow
 def test_the_iwan_24_blade_ring_s_reduced_tangent_matches_differences():
     """The README's preloaded 24-blade Iwan ring on its map reduced by the symmetry, at 295 rad/s: the replay's
