@@ -416,44 +416,47 @@ class ContactTangent:
     def _rigid_stick(self, j: int, m: int) -> bool:
         return bool(self._stick_table[self.tables.claw[j], m])
 
+    def _along_flow(self, t, y, cm):
+        """``y`` moved along the flow of ``cm`` by ``1e-14`` of a step, then ten times more each, up to ``1e-8``:
+        far less than the kernel's event bracket (``event_tol h``). ``(time, state)`` each."""
+        rate = self._rhs(t, y, cm)
+        h = self.ig.period / self.ig.steps_per_period
+        for k in range(14, 7, -1):
+            dt = 10.0 ** -k * h
+            yield t + dt, y + dt * rate
+
     def _past_root(self, t, y, cm, j, gi, K):
         """``y``, or where contact ``j``'s guard ``gi`` has not yet crossed there, ``y`` a little farther along the
-        flow, where it has.
+        flow (:meth:`_along_flow`), where it has.
 
         The kernel fires a transition at the far end of its event's bracket, past the guard's root (by at most its
         ``event_tol``), and a law with labels (the Iwan elements' modes) decides them there from the state: the
         element whose guard crossed slips. The replay's state at the logged time can lie a rounding error short of
         the root (``5e-15`` of the state on a 4-blade ring), where the same reset keeps the element stuck; moved
-        along the flow by ``1e-14`` of a step or more, far less than the bracket, it decides as the kernel did.
-        A guard that has not crossed within ``1e-8`` of a step was fired short of its root, with another contact's
-        event (:func:`~blademodel.numeric.contact_guards.mark_near`): ``y`` as it is.
+        along the flow by ``1e-14`` of a step or more it decides as the kernel did. A guard that has not crossed
+        within ``1e-8`` of a step was fired short of its root, with another contact's event
+        (:func:`~blademodel.numeric.contact_guards.mark_near`): ``y`` as it is.
         """
         d = int(self.mod.GDIR[K, int(cm[j]), int(gi)])
-        g = self._guard(t, y, cm, j, gi)
-        if d == 0 or (d < 0 and g < 0.0) or (d > 0 and g > 0.0):
+
+        def crossed(tt, yy):
+            g = self._guard(tt, yy, cm, j, gi)
+            return (d < 0 and g < 0.0) or (d > 0 and g > 0.0)
+
+        if d == 0 or crossed(t, y):
             return y
-        rate = self._rhs(t, y, cm)
-        h = self.ig.period / self.ig.steps_per_period
-        for k in range(14, 7, -1):
-            moved = y + (10.0 ** -k * h) * rate
-            g = self._guard(t + 10.0 ** -k * h, moved, cm, j, gi)
-            if (d < 0 and g < 0.0) or (d > 0 and g > 0.0):
-                return moved
-        return y   # fired short of its root with another contact's event (``mark_near``): the reset decides there
+        return next((moved for tt, moved in self._along_flow(t, y, cm) if crossed(tt, moved)), y)
 
     def _as_the_kernel(self, fire, t, y, cm, labels, target, j):
-        """``(y, fire(y))`` with ``y`` moved along the flow by ``1e-14`` of a step, then ten times more up to ``1e-8``,
-        until the reset ``fire`` sets the contact's ``labels`` to ``target``.
+        """``(y, fire(y))`` with ``y`` moved along the flow (:meth:`_along_flow`) until the reset ``fire`` sets the
+        contact's ``labels`` to ``target``.
 
         Raises
         ------
         ContactTangentError
             Where it does not within ``1e-8`` of a step.
         """
-        rate = self._rhs(t, y, cm)
-        h = self.ig.period / self.ig.steps_per_period
-        for k in range(14, 7, -1):
-            moved = y + (10.0 ** -k * h) * rate
+        for _, moved in self._along_flow(t, y, cm):
             after = fire(moved)
             if np.array_equal(after[labels], target):
                 return moved, after
@@ -517,14 +520,15 @@ class ContactTangent:
         if block is None:
             block = np.empty((free.size, cols.size))
             for c, (i, e) in enumerate(zip(cols, steps)):
-                block[:, c] = self._decided_column(fire, y, i, e, labels, target, free, j, t)
+                block[:, c] = self._decided_column(fire, y, after[free], i, e, labels, target, free, j, t)
             self._resets[key] = block
         Rj[np.ix_(free, cols)] = block
         return Rj, after
 
     @staticmethod
-    def _decided_column(fire, y, i, e, labels, target, free, j, t) -> np.ndarray:
-        """The column ``i`` of the reset ``fire``'s rows ``free`` at ``y``, its labels held at ``target``.
+    def _decided_column(fire, y, base, i, e, labels, target, free, j, t) -> np.ndarray:
+        """The column ``i`` of the reset ``fire``'s rows ``free`` at ``y`` (``base``: their values there), its labels
+        held at ``target``.
 
         The central difference of step ``e`` where both sides keep those labels; a one-sided one on the side
         that does where only one does (the reset is affine for fixed labels, so either is exact to rounding).
@@ -533,7 +537,6 @@ class ContactTangent:
         the steps set: the one-sided differences either side agree (an element that starts to slip keeps its
         stretch, whatever the others do). Else at steps a hundred times shorter, then an error.
         """
-        base = fire(y)[free]
         for scale in (1.0, 1e-2, 1e-4):
             step = e * scale
             sides = []

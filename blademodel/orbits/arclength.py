@@ -57,7 +57,7 @@ from .branch import Branch, ContinuationInterrupted, SpecialPoint  # noqa: F401 
 from .corrector import _Context, _at_kink, _field_bracket, _off_circle, _special, _tangent
 from .family import _Family
 from .period_map import FlowError, _copy, _key, kernel_mode
-from .self_overlap import NEAR, SelfOverlap
+from .self_overlap import NEAR, SelfOverlap, segment_ratios
 from .shooting import (ShootingError, _n_coordinates, _scale_of_excursions, find_periodic_orbit, residual_size)
 
 
@@ -781,11 +781,7 @@ def _passed(ctx, pts, X, step) -> bool:
     nearest = float(np.min(np.linalg.norm(P - X, axis=1)))
     if nearest <= step or len(P) == 1:
         return nearest <= step
-    a, seg = P[:-1] - X, np.diff(P, axis=0)
-    length2 = np.einsum("ij,ij->i", seg, seg)
-    t = np.clip(-np.einsum("ij,ij->i", a, seg) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
-    dist = np.linalg.norm(a + t[:, None] * seg, axis=1)
-    return bool(np.min(dist / np.maximum(np.sqrt(length2), step)) <= NEAR)
+    return bool(np.min(segment_ratios(P[:-1] - X, P[1:] - X, step)) <= NEAR)
 
 
 #: How the message of a branch that stopped where its step fell below ``ds_min`` begins.

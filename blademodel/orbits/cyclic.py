@@ -151,17 +151,13 @@ class CyclicSymmetry:
         point of the reduced map that is an orbit of ``periods`` excitation periods.
 
         At least 1 where a friction law's discrete state (an Iwan element's label) differs from
-        the one it is turned onto, as :func:`~blademodel.orbits.shooting.residual_size` counts
-        it: scaled by :data:`~blademodel.orbits.shooting.LABEL_SCALE`, a label that differs by
-        1 would otherwise read as ``1e-12``.
+        the one it is turned onto (:func:`~blademodel.orbits.shooting.residual_size`): scaled by
+        :data:`~blademodel.orbits.shooting.LABEL_SCALE`, a label that differs by 1 would
+        otherwise read as ``1e-12``.
         """
+        from .shooting import residual_size
         y = np.asarray(y)[:self.n]
-        turned = y[self._powers[-1]]
-        off = float(np.max(np.abs(turned - y) / scale))
-        d = self.discrete
-        if d.size and np.any(np.rint(turned[d]) != np.rint(y[d])):
-            return max(off, 1.0)
-        return off
+        return residual_size((y[self._powers[-1]] - y) / scale, self.discrete)
 
     # --- the orbit over a whole period --------------------------------------------------------
     def whole_period(self, Y: np.ndarray) -> np.ndarray:

@@ -34,6 +34,17 @@ CHECKS = 3
 NEAR = 0.05
 
 
+def segment_ratios(a: np.ndarray, b: np.ndarray, step: float) -> np.ndarray:
+    """Each segment's distance from a point, over the longer of its length and ``step``: the segments run from the
+    rows of ``a`` to those of ``b``, both taken from the point (a point *lies on* a segment where this is at most
+    :data:`NEAR`)."""
+    seg = b - a
+    length2 = np.einsum("ij,ij->i", seg, seg)
+    t = np.clip(-np.einsum("ij,ij->i", a, seg) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
+    dist = np.linalg.norm(a + t[:, None] * seg, axis=1)
+    return dist / np.maximum(np.sqrt(length2), step)
+
+
 class SelfOverlap:
     """The branch's points, to tell when new ones lie on the part it has already passed.
 
@@ -96,14 +107,7 @@ class SelfOverlap:
         cand = np.flatnonzero((self._lo[:k - 2] <= x[-1] + reach) & (x[-1] - reach <= self._hi[:k - 2]))
         if cand.size == 0:
             return None
-        a = (raw[cand] - x) / weights
-        b = (raw[cand + 1] - x) / weights
-        seg = b - a
-        length2 = np.einsum("ij,ij->i", seg, seg)
-        length = np.sqrt(length2)
-        t = np.clip(-np.einsum("ij,ij->i", a, seg) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
-        dist = np.linalg.norm(a + t[:, None] * seg, axis=1)
-        ratio = dist / np.maximum(length, step)
+        ratio = segment_ratios((raw[cand] - x) / weights, (raw[cand + 1] - x) / weights, step)
         best = int(np.argmin(ratio))
         return int(cand[best]) if ratio[best] <= NEAR else None
 
