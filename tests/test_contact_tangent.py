@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from blademodel.config import BladedDisk
-from blademodel.numeric.contact_tangent import stability_matrix
+from blademodel.numeric.contact_tangent import amplification_powers, stability_matrix, stability_matrix_from_powers
 from blademodel.numeric.methods import get_method
 from blademodel.numeric.tangent import SensitivityError
 from blademodel.numeric.kernels import make_integrator
@@ -51,6 +51,42 @@ def test_the_stability_matrix_is_the_step_jacobian_of_a_linear_flow(name):
     step = Y + h * sum(b * k for b, k in zip(method.b, K))
     np.testing.assert_allclose(stability_matrix(h * A, method.amplification_coefficients()), step,
                                rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("name", ["rk4", "rk8"])
+def test_the_step_matrix_from_kept_powers_is_horner_s_at_any_step(name):
+    """``sum_k c_k h^k A^k`` from ``A``'s powers, kept once, is Horner's ``R(hA)`` at every step ``h`` (a whole step
+    and sub-steps down to ``1e-9`` of it), to rounding; one power short, it lacks the highest term."""
+    coefficients = get_method(name).amplification_coefficients()
+    rng = np.random.default_rng(5)
+    A = rng.normal(size=(7, 7))
+    P = amplification_powers(A, coefficients.size - 1)
+    for h in (0.3, 0.0217, 1e-9):
+        np.testing.assert_allclose(stability_matrix_from_powers(P, h, coefficients),
+                                   stability_matrix(h * A, coefficients), rtol=0, atol=1e-14)
+    d = coefficients.size - 1
+    short = amplification_powers(A, d - 1)
+    full = stability_matrix(A, coefficients)
+    highest = coefficients[-1] * np.linalg.matrix_power(A, d)
+    rounding = 1e-13 * np.max(np.abs(full))
+    assert np.max(np.abs(highest)) > 1e3 * rounding
+    np.testing.assert_allclose(full - stability_matrix_from_powers(short, 1.0, coefficients), highest, rtol=0,
+                               atol=rounding)
+
+
+def test_the_ring_s_monodromy_is_the_same_with_horner_s_step_matrices(monkeypatch):
+    """The replay with each whole step's ``R(hA)`` from the mode's kept powers is the replay with Horner's rule
+    (as sparse, larger rings take it), to rounding: a mistuned ring whose events fall in several clusters."""
+    from blademodel.numeric import contact_tangent
+    ig, orbit = ring_orbit("coulomb", blades=6, engine_order=2, mistuning_std=0.05, mistuning_seed=1, F0=120.0)
+    contact_tangent._CACHES.clear()
+    by_powers = PeriodMap(ig, 1, jacobian="tangent", workers=1).derivatives(orbit.state, orbit.mode.copy())
+    monkeypatch.setattr(contact_tangent, "POWERS_BELOW", 0)
+    contact_tangent._CACHES.clear()
+    horner = PeriodMap(ig, 1, jacobian="tangent", workers=1).derivatives(orbit.state, orbit.mode.copy())
+    contact_tangent._CACHES.clear()
+    assert by_powers.events == horner.events >= 80
+    assert scaled_error(by_powers.monodromy, horner.monodromy, orbit.scale) < 1e-12
 
 
 def _tangent_and_differences(ig, orbit, rel_step=1e-5):

@@ -56,7 +56,7 @@ from .tangent import SensitivityError
 _CACHES: OrderedDict = OrderedDict()
 _KEEP = 4
 #: The most bytes the modes' matrices ``A`` of one model may hold; the blocks, guard gradients, clusters and
-#: projections get an eighth of it each. A long continuation of a ring meets thousands of modes (4888 on the
+#: projections get an eighth of it each, the powers of ``A`` and of its blocks (:data:`POWERS_BELOW`) a quarter. A long continuation of a ring meets thousands of modes (4888 on the
 #: 24-blade ring from 270 to 300 rad/s, 360 MB of dense ``A``; from :data:`GROUPED_FROM` states on they are
 #: sparse, 22-28 kB each at 96 blades, where dense they were 1.2 MB and a period's 2672 overflowed the budget).
 KEEP_BYTES = 1 << 29
@@ -66,6 +66,12 @@ KEEP_BYTES = 1 << 29
 #: overhead cost more than they save there (``benchmarks/ring_tangent.py``: 0.7-0.95 times as fast cold at 8 to
 #: 24 blades, 1.2 times as fast at 48, 2.2-2.4 cold and 4.8-5.0 warm at 96).
 GROUPED_FROM = 128
+#: Below this many physical states (where ``A`` is dense), a whole step's ``R(hA)`` is assembled from the mode's
+#: kept powers ``A, A^2, ..., A^d`` (:func:`amplification_powers`): one combination of ``d`` arrays instead of the
+#: ``d - 1`` products of Horner's rule. ``A`` does not depend on the step, which moves with the excitation
+#: frequency from point to point of a continuation, so the powers are reused where ``R(hA)`` is not
+#: (``benchmarks/ring_step_matrices.py``). Sparse ``A`` (larger rings) keeps Horner's rule: its powers fill in.
+POWERS_BELOW = GROUPED_FROM
 
 
 def _caches(integrator) -> dict:
@@ -74,7 +80,8 @@ def _caches(integrator) -> dict:
     c = _CACHES.pop(key, None) or {"A": _Kept(KEEP_BYTES), "gy": _Kept(KEEP_BYTES // 8),
                                    "blocks": _Kept(KEEP_BYTES // 8), "clusters": _Kept(KEEP_BYTES // 8),
                                    "checked": set(), "projections": _Kept(KEEP_BYTES // 8), "pattern": [],
-                                   "ungrouped": set(), "resets": _Kept(KEEP_BYTES // 8)}
+                                   "ungrouped": set(), "resets": _Kept(KEEP_BYTES // 8),
+                                   "powers": _Kept(KEEP_BYTES // 4)}
     _CACHES[key] = c
     while len(_CACHES) > _KEEP:
         _CACHES.popitem(last=False)
@@ -99,6 +106,29 @@ def stability_matrix(hA: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
     for c in coefficients[-3::-1]:
         out = hA @ out
         out.flat[::m + 1] += c
+    return out
+
+
+def amplification_powers(A: np.ndarray, degree: int) -> np.ndarray:
+    """``A, A^2, ..., A^degree`` of a dense square ``A``, each flattened: a ``(degree, n * n)`` array."""
+    n = A.shape[0]
+    P = np.empty((degree, n * n))
+    Ak = np.asarray(A, dtype=float)
+    P[0] = Ak.ravel()
+    for k in range(1, degree):
+        Ak = A @ Ak
+        P[k] = Ak.ravel()
+    return P
+
+
+def stability_matrix_from_powers(P: np.ndarray, h: float, coefficients: np.ndarray) -> np.ndarray:
+    """:func:`stability_matrix` of ``h A`` from ``A``'s powers ``P`` (:func:`amplification_powers`, to the
+    polynomial's degree): ``sum_k c_k h^k A^k`` as one product of the scaled coefficients with ``P``."""
+    degree = P.shape[0]
+    n = int(round(P.shape[1] ** 0.5))
+    c = coefficients[1:degree + 1] * h ** np.arange(1, degree + 1)
+    out = (c @ P).reshape(n, n)
+    out.flat[::n + 1] += coefficients[0]
     return out
 
 
@@ -144,6 +174,10 @@ class ContactTangent:
         self._factored = None   # the contact modes the stick problem in the work arrays is factored for
         self._blocks, self._cluster_sets, self._projections = caches["blocks"], caches["clusters"], caches["projections"]
         self._resets = caches["resets"]   # labelled laws' reset Jacobians, by contact, guard, mode and labels
+        # the modes' powers of A (and of its blocks), from which R(hA) is assembled at any step
+        self._apowers = caches["powers"]
+        # else a whole step's R(hA) by Horner's rule (as for a sparse A)
+        self._whole_by_powers = self.n < POWERS_BELOW and not self._large
         self._R = _Kept(KEEP_BYTES // 8)   # the step matrices R(hA) of this integrator's step
         self._powers = _Kept(KEEP_BYTES // 8)   # their powers, for runs of whole steps without events
         self._G = np.zeros_like(integrator.GS[0])
@@ -294,14 +328,29 @@ class ContactTangent:
         return Ar
 
     def _step_matrix(self, h: float, cm, y, rows=None) -> np.ndarray:
-        """``R(hA)`` of the mode ``cm`` (``y``: a state where it holds), or its block of ``rows``."""
+        """``R(hA)`` of the mode ``cm`` (``y``: a state where it holds), or its block of ``rows`` (from the block's
+        kept powers, whatever the ring's size: a cluster's block is small and dense)."""
         if rows is None:
             key = (h, self._key(cm, y))
             M = self._R.get(key)
             if M is None:
-                M = self._R[key] = stability_matrix(h * self.flow_matrix(cm, y), self._poly)
+                M = self._R[key] = self._whole_step_matrix(h, cm, y)
             return M
-        return stability_matrix(h * self._block(cm, y, rows), self._poly)
+        key = (self._key(cm, y), rows.tobytes())
+        P = self._apowers.get(key)
+        if P is None:
+            P = self._apowers[key] = amplification_powers(self._block(cm, y, rows), self._poly.size - 1)
+        return stability_matrix_from_powers(P, h, self._poly)
+
+    def _whole_step_matrix(self, h: float, cm, y) -> np.ndarray:
+        """``R(hA)`` of the mode ``cm``: from its kept powers of ``A`` where ``A`` is dense, else by Horner's rule."""
+        if not self._whole_by_powers:
+            return stability_matrix(h * self.flow_matrix(cm, y), self._poly)
+        key = self._key(cm, y)
+        P = self._apowers.get(key)
+        if P is None:
+            P = self._apowers[key] = amplification_powers(self.flow_matrix(cm, y), self._poly.size - 1)
+        return stability_matrix_from_powers(P, h, self._poly)
 
     def _step_power(self, h: float, cm, y, m: int) -> np.ndarray:
         """``R(hA)^m`` of the mode ``cm``: ``m`` whole steps (kept, with the powers of two it is made of)."""
