@@ -102,6 +102,26 @@ def test_an_iwan_ring_orbit_is_found_from_a_short_transient():
     assert_allclose(orbit.state[free] / scale[free], r.final_state[:n][free] / scale[free], atol=1e-8)
 
 
+def test_a_preloaded_iwan_ring_s_reduced_branch_starts_on_an_orbit_of_the_whole_ring():
+    """The first orbit of a cyclic continuation carries labels with the rounding of its scaling; read as they are,
+    the turn's check refused it on every preloaded Iwan ring whose period turns a blade onto another (8 blades
+    under engine order 2 here; the README's 24-blade ring). It is an orbit of the whole ring over a period: the
+    whole map, integrated from it, brings it back, labels and all."""
+    values = dict(blades=8, engine_order=2, friction="iwan", gap=-1e-5)
+    branch = continuation(BladedDisk(**values), "omega", 280.0, 280.3, cyclic=True, max_points=3, workers=1)
+    assert len(branch.params) == 3
+    ig = make_integrator(BladedDisk(**values, omega=float(branch.params[0])).build(), kernel="contact")
+    y = branch.states[0]
+    mode = ig.mode_of(np.append(y, np.zeros(ig.n_state - y.size)))
+    Py, _ = PeriodMap(ig, 1, jacobian="differences", workers=1)(y, mode)
+    d = ig.discrete_states
+    free = np.setdiff1d(np.arange(y.size), d)
+    scale = np.max(np.abs(branch.states[:, free]), axis=0)
+    scale = np.maximum(scale, 1e-3 * scale.max())
+    assert_allclose(Py[free] / scale, y[free] / scale, rtol=0, atol=1e-9)
+    assert np.array_equal(np.rint(Py[d]), np.rint(y[d])) and np.any(np.rint(y[d]) != 0.0)
+
+
 def test_a_label_that_the_ring_s_turn_does_not_bring_back_is_no_travelling_wave():
     """``CyclicSymmetry.comes_back`` counts a label that differs from the one it is turned onto as 1 (as
     ``residual_size`` does): scaled by ``LABEL_SCALE`` it read as ``1e-12`` before, below ``WAVE_TOL``."""
@@ -123,6 +143,12 @@ def test_a_label_that_the_ring_s_turn_does_not_bring_back_is_no_travelling_wave(
     assert sym.comes_back(y, scale) >= 1.0
     y[d] = 1.0      # all alike again
     assert sym.comes_back(y, scale) == 0.0
+    # labels carrying the rounding of a corrected point's scaling (1e-11 on the preloaded 24-blade ring, whose
+    # first orbit was refused so) are read as whole numbers, as the map reads them
+    y[d] += np.random.default_rng(0).uniform(-1e-11, 1e-11, d.size)
+    assert sym.comes_back(y, scale) == 0.0
+    y[d[0]] = -1.0
+    assert sym.comes_back(y, scale) >= 1.0
 
 
 class _DriftingLabel(FrictionLaw):

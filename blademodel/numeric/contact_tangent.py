@@ -56,7 +56,8 @@ from .tangent import SensitivityError
 _CACHES: OrderedDict = OrderedDict()
 _KEEP = 4
 #: The most bytes the modes' matrices ``A`` of one model may hold; the blocks, guard gradients, clusters and
-#: projections get an eighth of it each, the powers of ``A`` and of its blocks (:data:`POWERS_BELOW`) a quarter. A long continuation of a ring meets thousands of modes (4888 on the
+#: projections get an eighth of it each, the powers of ``A`` and of its blocks (:data:`POWERS_BELOW`) a quarter.
+#: A long continuation of a ring meets thousands of modes (4888 on the
 #: 24-blade ring from 270 to 300 rad/s, 360 MB of dense ``A``; from :data:`GROUPED_FROM` states on they are
 #: sparse, 22-28 kB each at 96 blades, where dense they were 1.2 MB and a period's 2672 overflowed the budget).
 KEEP_BYTES = 1 << 29

@@ -153,11 +153,15 @@ class CyclicSymmetry:
         At least 1 where a friction law's discrete state (an Iwan element's label) differs from
         the one it is turned onto (:func:`~blademodel.orbits.shooting.residual_size`): scaled by
         :data:`~blademodel.orbits.shooting.LABEL_SCALE`, a label that differs by 1 would
-        otherwise read as ``1e-12``.
+        otherwise read as ``1e-12``. The labels are read as whole numbers, as the map reads them
+        (:func:`~blademodel.orbits.shooting.scaled_residual`): a corrected point's labels carry the
+        rounding of its scaling (``1e-11`` on the preloaded 24-blade Iwan ring).
         """
         from .shooting import residual_size
-        y = np.asarray(y)[:self.n]
-        return residual_size((y[self._powers[-1]] - y) / scale, self.discrete)
+        y = np.array(y[:self.n], dtype=float)
+        d = self.discrete
+        y[d] = np.rint(y[d])
+        return residual_size((y[self._powers[-1]] - y) / scale, d)
 
     # --- the orbit over a whole period --------------------------------------------------------
     def whole_period(self, Y: np.ndarray) -> np.ndarray:
