@@ -176,7 +176,7 @@ class ContactTangent:
         self._blocks, self._cluster_sets, self._projections = caches["blocks"], caches["clusters"], caches["projections"]
         self._resets = caches["resets"]   # labelled laws' reset Jacobians, by contact, guard, mode and labels
         # the modes' powers of A (and of its blocks), from which R(hA) is assembled at any step
-        self._apowers = caches["powers"]
+        self._powers_of_A = caches["powers"]
         # else a whole step's R(hA) by Horner's rule (as for a sparse A)
         self._whole_by_powers = self.n < POWERS_BELOW and not self._large
         self._R = _Kept(KEEP_BYTES // 8)   # the step matrices R(hA) of this integrator's step
@@ -337,20 +337,19 @@ class ContactTangent:
             if M is None:
                 M = self._R[key] = self._whole_step_matrix(h, cm, y)
             return M
-        key = (self._key(cm, y), rows.tobytes())
-        P = self._apowers.get(key)
-        if P is None:
-            P = self._apowers[key] = amplification_powers(self._block(cm, y, rows), self._poly.size - 1)
-        return stability_matrix_from_powers(P, h, self._poly)
+        return self._from_powers(h, (self._key(cm, y), rows.tobytes()), lambda: self._block(cm, y, rows))
 
     def _whole_step_matrix(self, h: float, cm, y) -> np.ndarray:
         """``R(hA)`` of the mode ``cm``: from its kept powers of ``A`` where ``A`` is dense, else by Horner's rule."""
         if not self._whole_by_powers:
             return stability_matrix(h * self.flow_matrix(cm, y), self._poly)
-        key = self._key(cm, y)
-        P = self._apowers.get(key)
+        return self._from_powers(h, self._key(cm, y), lambda: self.flow_matrix(cm, y))
+
+    def _from_powers(self, h: float, key, matrix) -> np.ndarray:
+        """``R(h M)`` from the powers of ``M = matrix()`` kept under ``key`` (taken, and ``M`` built, once)."""
+        P = self._powers_of_A.get(key)
         if P is None:
-            P = self._apowers[key] = amplification_powers(self.flow_matrix(cm, y), self._poly.size - 1)
+            P = self._powers_of_A[key] = amplification_powers(matrix(), self._poly.size - 1)
         return stability_matrix_from_powers(P, h, self._poly)
 
     def _step_power(self, h: float, cm, y, m: int) -> np.ndarray:
