@@ -8,6 +8,7 @@ meets thousands of them.
 
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 
 import numpy as np
@@ -29,27 +30,33 @@ class Kept:
 
     What is kept here is computed from the model's values alone, so a dropped value is
     computed again bit for bit the same: the budget moves the cost, never a result.
+    Safe between threads (the grazing locator's thread replays on the same model's kept
+    matrices as the continuation's): a lookup and its move to the end, an insertion and
+    the drops it makes, each happen whole.
     """
 
     def __init__(self, budget: int):
         self.budget, self.size, self._d = int(budget), 0, OrderedDict()
         self.dropped = 0
+        self._lock = threading.Lock()
 
     def get(self, key):
-        value = self._d.get(key)
-        if value is not None:
-            self._d.move_to_end(key)
-        return value
+        with self._lock:
+            value = self._d.get(key)
+            if value is not None:
+                self._d.move_to_end(key)
+            return value
 
     def __setitem__(self, key, value):
-        old = self._d.pop(key, None)
-        if old is not None:
-            self.size -= nbytes(old)
-        self._d[key] = value
-        self.size += nbytes(value)
-        while self.size > self.budget and len(self._d) > 1:
-            self.size -= nbytes(self._d.popitem(last=False)[1])
-            self.dropped += 1
+        with self._lock:
+            old = self._d.pop(key, None)
+            if old is not None:
+                self.size -= nbytes(old)
+            self._d[key] = value
+            self.size += nbytes(value)
+            while self.size > self.budget and len(self._d) > 1:
+                self.size -= nbytes(self._d.popitem(last=False)[1])
+                self.dropped += 1
 
     def __len__(self):
         return len(self._d)
