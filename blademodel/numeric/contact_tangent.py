@@ -319,11 +319,11 @@ class ContactTangent:
         return self._linear_along(lambda z: self._rhs(0.0, z, cm)[:n], base, p, A @ p[:n], tol=1e-8)
 
     def _block(self, cm, y, rows) -> np.ndarray:
-        """``A``'s block on ``rows`` in the mode ``cm`` (kept, as ``A`` is)."""
-        A = self.flow_matrix(cm, y)
+        """``A``'s block on ``rows`` in the mode ``cm`` (kept, as ``A`` is: a kept block's ``A`` was checked)."""
         key = (self._key(cm, y), rows.tobytes())
         Ar = self._blocks.get(key)
         if Ar is None:
+            A = self.flow_matrix(cm, y)
             sub = A[rows][:, rows].toarray() if hasattr(A, "toarray") else A[np.ix_(rows, rows)]
             Ar = self._blocks[key] = np.ascontiguousarray(sub)
         return Ar
