@@ -55,8 +55,8 @@ from .tangent import SensitivityError
 #: would give, bit for bit, so a branch does not depend on what was computed before it.
 _CACHES: OrderedDict = OrderedDict()
 _KEEP = 4
-#: The most bytes the modes' matrices ``A`` of one model may hold; the blocks, guard gradients, clusters and
-#: projections get an eighth of it each, the powers of ``A`` and of its blocks (:data:`POWERS_BELOW`) a quarter.
+#: The most bytes the modes' matrices ``A`` of one model may hold; the guard gradients, clusters, projections and
+#: resets get an eighth of it each, the powers of ``A`` (:data:`POWERS_BELOW`) and of its blocks a quarter.
 #: A long continuation of a ring meets thousands of modes (4888 on the
 #: 24-blade ring from 270 to 300 rad/s, 360 MB of dense ``A``; from :data:`GROUPED_FROM` states on they are
 #: sparse, 22-28 kB each at 96 blades, where dense they were 1.2 MB and a period's 2672 overflowed the budget).
@@ -79,7 +79,7 @@ def _caches(integrator) -> dict:
     """The kept matrices of ``integrator``'s model and values (its ``flow_digest``)."""
     key = integrator.flow_digest()
     c = _CACHES.pop(key, None) or {"A": _Kept(KEEP_BYTES), "gy": _Kept(KEEP_BYTES // 8),
-                                   "blocks": _Kept(KEEP_BYTES // 8), "clusters": _Kept(KEEP_BYTES // 8),
+                                   "clusters": _Kept(KEEP_BYTES // 8),
                                    "checked": set(), "projections": _Kept(KEEP_BYTES // 8), "pattern": [],
                                    "ungrouped": set(), "resets": _Kept(KEEP_BYTES // 8),
                                    "powers": _Kept(KEEP_BYTES // 4)}
@@ -173,9 +173,10 @@ class ContactTangent:
         self._probe = np.random.default_rng(0).uniform(-1.0, 1.0, self.n)
         self._probe[self._labels] = 0.0   # a probe moves no label (a label a little off 0 reads as slip)
         self._factored = None   # the contact modes the stick problem in the work arrays is factored for
-        self._blocks, self._cluster_sets, self._projections = caches["blocks"], caches["clusters"], caches["projections"]
+        self._cluster_sets, self._projections = caches["clusters"], caches["projections"]
         self._resets = caches["resets"]   # labelled laws' reset Jacobians, by contact, guard, mode and labels
-        # the modes' powers of A (and of its blocks), from which R(hA) is assembled at any step
+        # the modes' powers of A and of its blocks (the blocks themselves the first), from which R(hA) is assembled
+        # at any step
         self._powers_of_A = caches["powers"]
         # else a whole step's R(hA) by Horner's rule (as for a sparse A)
         self._whole_by_powers = self.n < POWERS_BELOW and not self._large
@@ -318,15 +319,20 @@ class ContactTangent:
         p[:n] = 1e-3 * size * self._probe
         return self._linear_along(lambda z: self._rhs(0.0, z, cm)[:n], base, p, A @ p[:n], tol=1e-8)
 
-    def _block(self, cm, y, rows) -> np.ndarray:
-        """``A``'s block on ``rows`` in the mode ``cm`` (kept, as ``A`` is: a kept block's ``A`` was checked)."""
+    def _block_powers(self, cm, y, rows) -> np.ndarray:
+        """The powers (:func:`amplification_powers`) of ``A``'s block on ``rows`` in the mode ``cm``: kept, as ``A``
+        is (a kept block's ``A`` was built and checked); the block itself is the first."""
         key = (self._key(cm, y), rows.tobytes())
-        Ar = self._blocks.get(key)
-        if Ar is None:
+        P = self._powers_of_A.get(key)
+        if P is None:
             A = self.flow_matrix(cm, y)
             sub = A[rows][:, rows].toarray() if hasattr(A, "toarray") else A[np.ix_(rows, rows)]
-            Ar = self._blocks[key] = np.ascontiguousarray(sub)
-        return Ar
+            P = self._powers_of_A[key] = amplification_powers(sub, self._poly.size - 1)
+        return P
+
+    def _block(self, cm, y, rows) -> np.ndarray:
+        """``A``'s block on ``rows`` in the mode ``cm`` (the first of its kept powers)."""
+        return self._block_powers(cm, y, rows)[0].reshape(rows.size, rows.size)
 
     def _step_matrix(self, h: float, cm, y, rows=None) -> np.ndarray:
         """``R(hA)`` of the mode ``cm`` (``y``: a state where it holds), or its block of ``rows`` (from the block's
@@ -337,19 +343,16 @@ class ContactTangent:
             if M is None:
                 M = self._R[key] = self._whole_step_matrix(h, cm, y)
             return M
-        return self._from_powers(h, (self._key(cm, y), rows.tobytes()), lambda: self._block(cm, y, rows))
+        return stability_matrix_from_powers(self._block_powers(cm, y, rows), h, self._poly)
 
     def _whole_step_matrix(self, h: float, cm, y) -> np.ndarray:
         """``R(hA)`` of the mode ``cm``: from its kept powers of ``A`` where ``A`` is dense, else by Horner's rule."""
         if not self._whole_by_powers:
             return stability_matrix(h * self.flow_matrix(cm, y), self._poly)
-        return self._from_powers(h, self._key(cm, y), lambda: self.flow_matrix(cm, y))
-
-    def _from_powers(self, h: float, key, matrix) -> np.ndarray:
-        """``R(h M)`` from the powers of ``M = matrix()`` kept under ``key`` (taken, and ``M`` built, once)."""
+        key = self._key(cm, y)
         P = self._powers_of_A.get(key)
         if P is None:
-            P = self._powers_of_A[key] = amplification_powers(matrix(), self._poly.size - 1)
+            P = self._powers_of_A[key] = amplification_powers(self.flow_matrix(cm, y), self._poly.size - 1)
         return stability_matrix_from_powers(P, h, self._poly)
 
     def _step_power(self, h: float, cm, y, m: int) -> np.ndarray:

@@ -778,10 +778,9 @@ def _passed(ctx, pts, X, step) -> bool:
     if not pts:
         return False
     P = np.array([ctx.unknowns(q) for q in pts])
-    nearest = float(np.min(np.linalg.norm(P - X, axis=1)))
-    if nearest <= step or len(P) == 1:
-        return nearest <= step
-    return bool(np.min(segment_ratios(P[:-1] - X, P[1:] - X, step)) <= NEAR)
+    if np.min(np.linalg.norm(P - X, axis=1)) <= step:
+        return True
+    return len(P) > 1 and bool(np.min(segment_ratios(P[:-1] - X, P[1:] - X, step)) <= NEAR)
 
 
 #: How the message of a branch that stopped where its step fell below ``ds_min`` begins.
