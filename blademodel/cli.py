@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 from importlib.metadata import entry_points
 from typing import Optional, Sequence
@@ -51,6 +52,22 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: A negative number in any float notation (argparse before Python 3.12 takes ``-1e-5`` for an option).
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+
+
+def _negative_values_attached(argv: Sequence[str]) -> list:
+    """``argv`` with each negative number that follows a long option attached to it (``--to -1e-5`` as
+    ``--to=-1e-5``), which argparse reads as that option's value in every notation."""
+    out: list = []
+    for token in argv:
+        if out and _NEGATIVE_NUMBER.match(token) and out[-1].startswith("--") and "=" not in out[-1]:
+            out[-1] = f"{out[-1]}={token}"
+        else:
+            out.append(token)
+    return out
+
+
 def _message(exc: BaseException) -> str:
     if isinstance(exc, KeyError) and exc.args:
         return str(exc.args[0])  # str(KeyError) would quote the message
@@ -76,7 +93,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     """
     from . import interrupts
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser().parse_args(_negative_values_attached(sys.argv[1:] if argv is None else argv))
         with interrupts.handled():   # Ctrl-C and SIGTERM raise KeyboardInterrupt, never lost
             return int(args.run(args) or 0)
     except KeyboardInterrupt as e:  # Ctrl-C: one line (a sweep's says how to resume), no traceback

@@ -919,3 +919,33 @@ def test_a_mistuned_ring_s_wrong_turn_at_a_nonsmooth_fold_is_taken_again_and_rig
     folds = [q.param for q in b.special if q.kind == "nonsmooth-fold"]
     assert len(folds) == 1 and abs(folds[0] - 252.8536) < 1e-3
     assert b.params.max() < 252.854 and b.params[-1] < 250.0
+
+
+def test_a_branch_lands_on_the_end_of_the_range_where_the_field_takes_no_values_past_it():
+    """``mu`` takes no value below 0. Continued down to 0, the Coulomb pair's branch used to crawl toward it in ever
+    shorter steps (its corrections stepped past 0, where no model can be built) and stall at ``mu = 6e-8`` saying
+    that more steps a period might get through. Where the prediction passes such an end, the branch now shoots at
+    the end's value: its last point is an orbit at ``mu = 0`` exactly, the one that shooting from rest finds on the
+    frictionless pair, and the branch says it reached the end."""
+    cfg = BladePair(friction="coulomb")
+    b = continuation(cfg, "mu", 0.02, 0.0, workers=1)
+    assert b.params[-1] == 0.0 and np.all(b.params[:-1] > 0)
+    assert "reached mu = 0" in b.message
+    frictionless = find_periodic_orbit(BladePair(friction="coulomb", mu=0.0).build(), workers=1)
+    scale = np.max(np.abs(b.states), axis=0)
+    assert np.max(np.abs(b.states[-1] - frictionless.state) / scale) < 1e-8
+    assert b.residuals[-1] <= 1e-10
+
+
+def test_a_range_that_ends_outside_the_field_s_values_is_refused_naming_the_field_and_value(capsys):
+    """An end of the range that the config does not take is refused before any orbit is sought, with the
+    field, the value and the config's own reason; the command line prints it and exits with 2 (also for an end
+    written in exponent notation, which argparse before Python 3.12 reads as an option)."""
+    with pytest.raises(ValueError, match=r"mu = -0\.2, an end of the range, is not a value BladePair takes "
+                                         r"\(.*greater than or equal to 0\)"):
+        continuation(BladePair(friction="coulomb"), "mu", 0.1, -0.2, workers=1)
+    from blademodel.cli import main
+    from pathlib import Path
+    model = str(Path(__file__).resolve().parents[1] / "models" / "blade_pair_coulomb.yaml")
+    assert main(["continue", model, "--param", "mu", "--from", "0.1", "--to", "-2e-1"]) == 2
+    assert "mu = -0.2, an end of the range, is not a value BladePair takes" in capsys.readouterr().err

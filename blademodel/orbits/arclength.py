@@ -80,7 +80,9 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
     start, stop : float
         The range; the branch starts at ``start`` and ends when the field leaves the range
         (it may turn back at folds in between), or earlier where it cannot go on or runs onto
-        points it already has (a retrace, a closed branch): its ``message`` says which.
+        points it already has (a retrace, a closed branch): its ``message`` says which. Both
+        must be values the config takes (``ValueError`` otherwise); where it takes none past an
+        end (``mu`` below 0), the branch's last point lies on that end exactly.
     periods : int
         Period of the orbits in excitation periods.
     guess, mode, transient
@@ -458,7 +460,13 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     retaken = []        # (where, the shorter ds_max) of each wrong turn taken again (:func:`_before_the_turn`)
     while earlier + len(pts) < max_points:
         X_pred, A_pred = ctx.predict(pts, X, T, A, h)
-        X_new, m_new, A_new = ctx.correct(X_pred, T, m, A_pred, column=ctx.column_rule(pts))
+        landed, X_end = _end_landing(ctx, X, X_pred, bounds)
+        if landed is not None:
+            # the field takes no values past this end of the range (mu below 0): corrections there cannot be
+            # built, so the branch lands on the end itself, shooting at its value
+            X_new, m_new, A_new = ctx.correct_at_value(X_end, m)
+        else:
+            X_new, m_new, A_new = ctx.correct(X_pred, T, m, A_pred, column=ctx.column_rule(pts))
         if X_new is not None and np.linalg.norm(X_new - X_pred) > ds_max and _passed(ctx, pts[:-2], X_new, h):
             # Newton's method wandered off and converged on the part of the branch already passed
             # (measured: from 261.45 rad/s, 35 steps away, onto the bilinear pair's branch at 266.15
@@ -620,8 +628,9 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         if progress is not None:
             progress(earlier + len(pts), X[-1] * span)
         lam = X[-1] * span
-        if lam > hi + 1e-12 * span or lam < lo - 1e-12 * span:
-            if bounds[1] in (lo, hi) and (lam > hi if bounds[1] == hi else lam < lo):
+        on_end = landed is not None and float(X_new[-1]) == X_end[-1]   # (the shot keeps the field's value)
+        if lam > hi + 1e-12 * span or lam < lo - 1e-12 * span or on_end:
+            if bounds[1] in (lo, hi) and (lam > hi if bounds[1] == hi else lam < lo) or on_end and landed == bounds[1]:
                 message = f"reached {name} = {bounds[1]:g}"
             break
         on_itself = overlap.verdict(pts, np.append(ctx.scale, span), taken) if new["regular"] else None
@@ -651,6 +660,23 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         message += (f" (it turned back onto itself after a wrong turn near {name} = {value:.6g} and took the turn "
                     f"again from before it at ds_max = {shorter:g})")
     return message
+
+
+def _end_landing(ctx, X, X_pred, bounds) -> tuple:
+    """``(end, X_end)`` where the prediction ``X_pred`` from ``X`` passes an end of the range ``bounds`` into values
+    the field does not take: that end, and the unknowns where the prediction's line meets it (to shoot from);
+    else ``(None, None)``.
+
+    Past an end the field does take, the branch ends at its first point past it, as before.
+    """
+    lam = X_pred[-1] * ctx.span
+    for end, outward in ((max(bounds), 1.0), (min(bounds), -1.0)):
+        if (lam - end) * outward > 0 and not ctx.fam.admits(lam):
+            x_end = end / ctx.span
+            X_end = X + (x_end - X[-1]) / (X_pred[-1] - X[-1]) * (X_pred - X)
+            X_end[-1] = x_end
+            return end, X_end
+    return None, None
 
 
 #: How many times a branch that turned back onto itself (a wrong turn at a kink) goes back before the turn with its

@@ -28,6 +28,14 @@ class _Family:
         except ValueError as e:
             raise ValueError(f"{type(config).__name__} has no field {name!r} to continue in, or {start!r} is not "
                              f"a value it takes: {e}") from None
+        for end in bounds or ():
+            try:
+                self.config_at(end)
+            except ValueError as e:
+                raise ValueError(f"{name} = {end!r}, an end of the range, is not a value {type(config).__name__} "
+                                 f"takes ({e}): end the range inside the values it takes (at its bound, say: the "
+                                 f"branch lands on the end of the range where the field takes no values past "
+                                 f"it)") from None
         self._cache: dict = {}
         self._dropped = (0, 0)   # integrations and replays of the maps no longer kept
         self._first = None
@@ -45,6 +53,14 @@ class _Family:
     def config_at(self, value: float):
         from ..config import apply_overrides
         return apply_overrides(self.config, {self.name: float(value)}, source="continuation")
+
+    def admits(self, value: float) -> bool:
+        """Whether the config takes ``value`` in the field (``mu`` takes no value below 0, ``omega`` none at 0)."""
+        try:
+            self.config_at(value)
+        except ValueError:
+            return False
+        return True
 
     def _values_at(self, value: float) -> tuple[np.ndarray, float | None]:
         """The raw parameters and excitation period of the model built at ``value`` (same structure as the first)."""
