@@ -10,6 +10,7 @@ from blademodel.numeric.kernels import make_integrator
 from blademodel.numeric.contract import C_EVENTS, N_COUNTERS
 from blademodel.orbits import PeriodMap, ShootingError, continuation, find_periodic_orbit, period_doubled_branch
 from blademodel.orbits.cyclic import CyclicError
+from blademodel.orbits.least_period import branch_least_periods
 from linear_reference import forced_response
 
 
@@ -233,6 +234,8 @@ def test_the_period_doubled_branch_of_the_bilinear_pair():
     pd = b1.points("period-doubling")[0]
     b2 = period_doubled_branch(cfg, "gamma", pd, 7.0, 7.6)
     assert b2.periods == 2 and b2.params[0] == pd.param
+    least = branch_least_periods(b2)   # the doubling is the period-1 orbit run twice; the rest are not
+    assert least[0] == 1 and np.all(least[1:] == 2)
     with pytest.raises(CyclicError, match="bladed disk"):   # the pair has no ring's symmetry to reduce by
         period_doubled_branch(cfg, "gamma", pd, 7.0, 7.6, cyclic=True)
     folds = b2.points("fold")

@@ -16,6 +16,7 @@ from ..orbits import (ContinuationInterrupted, FlowError, ShootingError, branch_
                       period_doubled_branch)
 from ..orbits.branch_states import alike, envelope, state_indices
 from ..orbits.cyclic import CyclicError
+from ..orbits.least_period import branch_least_periods
 from ..progress import Progress
 from . import jsonout
 from .common import (add_jacobian_arguments, add_model_arguments, add_stepping_arguments, check_at_least_one,
@@ -245,6 +246,7 @@ def run(args: argparse.Namespace) -> int:
            "message": branch.message, "integrations": branch.integrations, "replays": branch.replays,
            "values": branch.params.tolist(),
            "harmonic1": largest.tolist(), "stable": branch.stable.tolist(),
+           "least_periods": branch_least_periods(branch).tolist(),
            "special": [{"kind": p.kind, "value": p.param, "multiplier": [p.multiplier.real, p.multiplier.imag],
                         "bracket": None if p.bracket is None else list(p.bracket)}
                        for p in branch.special], "state": state,
@@ -257,7 +259,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     print(f"{len(branch.params)} period-{branch.periods} orbits from {args.param} = {branch.params[0]:.6g} to "
           f"{branch.params[-1]:.6g} ({branch.message}); {int(np.sum(~branch.stable))} unstable; "
-          f"{branch.integrations} integrations of the period map and {branch.replays} tangent replays")
+          f"{branch.integrations} integrations of the period map and {branch.replays} tangent replays"
+          f"{_run_again(branch, args.param)}")
     print(_peak(branch, state, idx, spread, args.param))
     for p in branch.special:
         if p.kind == "gap":
@@ -273,13 +276,26 @@ def run(args: argparse.Namespace) -> int:
             if b is None:
                 continue
             print(f"{len(b.params)} period-{b.periods} orbits from the {what} {k}, {args.param} = "
-                  f"{b.params.min():.6g} to {b.params.max():.6g} ({b.message}); {int(np.sum(~b.stable))} unstable")
+                  f"{b.params.min():.6g} to {b.params.max():.6g} ({b.message}); {int(np.sum(~b.stable))} unstable"
+                  f"{_run_again(b, args.param)}")
             for p in b.special:
                 print(f"  {p.kind} at {args.param} = {p.param:.8g}")
     for what, name in (("saved", args.out), ("saved", ", ".join(doubled_files)), ("plotted", args.plot)):
         if name:
             print(f"{what} {name}")
     return 0
+
+
+def _run_again(b, param: str) -> str:
+    """What the summary line of a branch adds where some of its orbits have a shorter least period than the
+    branch's (:func:`~blademodel.orbits.least_period.branch_least_periods`): how many, over which values."""
+    least = branch_least_periods(b)
+    parts = []
+    for k in sorted(set(least[least < b.periods].tolist())):
+        on = b.params[least == k]
+        where = f"at {on[0]:.6g}" if on.size == 1 else f"{on.min():.6g} to {on.max():.6g}"
+        parts.append(f"{on.size} of them the period-{k} orbit run {b.periods // k} times ({param} = {where})")
+    return "; " + "; ".join(parts) if parts else ""
 
 
 def _summary(b, idx: list) -> dict | None:
@@ -289,6 +305,7 @@ def _summary(b, idx: list) -> dict | None:
         return None
     return {"periods": b.periods, "points": len(b.params), "message": b.message, "values": b.params.tolist(),
             "harmonic1": envelope(b.harmonics, idx)[0].tolist(), "stable": b.stable.tolist(),
+            "least_periods": branch_least_periods(b).tolist(),
             "special": [{"kind": p.kind, "value": p.param} for p in b.special]}
 
 

@@ -49,6 +49,7 @@ def report(orbit, mode_name: str) -> dict:
     mu = orbit.multipliers
     return {
         "periods": orbit.periods,
+        "least_period": orbit.least_period(),
         "state": dict(zip(orbit.state_names, map(float, orbit.state))),
         "mode": mode_name,
         "multipliers": [{"re": float(m.real), "im": float(m.imag), "abs": float(abs(m))} for m in mu],
@@ -80,7 +81,10 @@ def run(args: argparse.Namespace) -> int:
         print(jsonout.dumps(rep))
         return 0
     big = orbit.multipliers[0]
-    print(f"{model.name}: period-{orbit.periods} orbit, {'stable' if orbit.stable else 'UNSTABLE'} "
+    least = rep["least_period"]
+    run_again = "" if least == orbit.periods else \
+        f" (of least period {least}: the period-{least} orbit run {orbit.periods // least} times)"
+    print(f"{model.name}: period-{orbit.periods} orbit{run_again}, {'stable' if orbit.stable else 'UNSTABLE'} "
           f"(largest multiplier {big.real:.6g}{big.imag:+.6g}i, |mu| = {abs(big):.6g}); "
           f"{len(orbit.history) - 1} Newton steps, scaled residual {orbit.residual:.2g}")
     print(f"state at t = 0 ({mode_name}): " + ", ".join(f"{k}={v:.6g}" for k, v in rep["state"].items()))

@@ -69,6 +69,13 @@ class PeriodicOrbit:
     def largest_multiplier(self) -> complex:
         return complex(self.multipliers[0])
 
+    def least_period(self, tol: float | None = None) -> int:
+        """The fewest excitation periods after which the orbit comes back: a divisor of ``periods``
+        (:func:`~.least_period.least_period`; 1 for the period-1 orbit found with ``periods = 2``)."""
+        from .least_period import LEAST_PERIOD_TOL, least_period
+        steps = (self.y.shape[0] - 1) // self.periods
+        return least_period(self.y[:-1:steps], self.scale, LEAST_PERIOD_TOL if tol is None else tol)
+
     def amplitudes(self) -> dict:
         """Half the peak-to-peak excursion of each state over the orbit, by name."""
         a = 0.5 * (self.y.max(axis=0) - self.y.min(axis=0))
