@@ -65,3 +65,6 @@ def test_the_commands_report_the_least_period(capsys):
                  "--json"]) == 0
     rep = json.loads(capsys.readouterr().out)
     assert set(rep["least_periods"]) == {1} and len(rep["least_periods"]) == rep["points"]
+    assert main(["continue", model, "--param", "gamma", "--from", "7.2", "--to", "7.5", "--switch"]) == 0
+    out = capsys.readouterr().out   # the doubled branch starts at the doubling, the period-1 orbit run twice
+    assert "from the period doubling 1" in out and "; 1 of them the period-1 orbit run 2 times (gamma = 7.32" in out

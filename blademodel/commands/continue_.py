@@ -293,7 +293,7 @@ def _run_again(b, param: str) -> str:
     parts = []
     for k in sorted(set(least[least < b.periods].tolist())):
         on = b.params[least == k]
-        where = f"at {on[0]:.6g}" if on.size == 1 else f"{on.min():.6g} to {on.max():.6g}"
+        where = f"{on[0]:.6g}" if on.size == 1 else f"{on.min():.6g} to {on.max():.6g}"
         parts.append(f"{on.size} of them the period-{k} orbit run {b.periods // k} times ({param} = {where})")
     return "; " + "; ".join(parts) if parts else ""
 
