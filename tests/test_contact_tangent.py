@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from blademodel.config import BladedDisk
-from blademodel.numeric.contact_tangent import amplification_powers, stability_matrix, stability_matrix_from_powers
+from blademodel.numeric.contact_tangent import (amplification_powers, sparse_stability_matrix, stability_matrix,
+                                                stability_matrix_from_powers)
 from blademodel.numeric.methods import get_method
 from blademodel.numeric.tangent import SensitivityError
 from blademodel.numeric.kernels import make_integrator
@@ -87,6 +88,60 @@ def test_the_ring_s_monodromy_is_the_same_with_horner_s_step_matrices(monkeypatc
     contact_tangent._CACHES.clear()
     assert by_powers.events == horner.events >= 80
     assert scaled_error(by_powers.monodromy, horner.monodromy, orbit.scale) < 1e-12
+
+
+@pytest.mark.parametrize("name", ["rk4", "rk8"])
+def test_a_sparse_step_matrix_is_horner_s_and_keeps_the_band_of_its_polynomial(name):
+    """Of a banded ``hA`` (each state coupled to its neighbours), ``R(hA)`` in sparse products equals the dense
+    Horner's rule to rounding and is nonzero only within ``d`` of the diagonal (``d`` the polynomial's degree), the
+    band a step couples; denser than :data:`SPARSE_STEPS_DENSITY` it comes back dense."""
+    from scipy.sparse import diags
+    from blademodel.numeric.contact_tangent import SPARSE_STEPS_DENSITY
+    coefficients = get_method(name).amplification_coefficients()
+    d = coefficients.size - 1
+    n = 12 * d
+    rng = np.random.default_rng(7)
+    hA = diags([rng.normal(size=n - 1), rng.normal(size=n), rng.normal(size=n - 1)], [-1, 0, 1], format="csr") * 0.3
+    R = sparse_stability_matrix(hA, coefficients)
+    assert hasattr(R, "toarray") and R.nnz <= SPARSE_STEPS_DENSITY * n * n
+    dense = stability_matrix(hA.toarray(), coefficients)
+    np.testing.assert_allclose(R.toarray(), dense, rtol=0, atol=1e-14 * np.max(np.abs(dense)))
+    i, j = np.nonzero(dense)
+    assert np.max(np.abs(i - j)) == d   # the band is the polynomial's (the test sees it)
+    i, j = R.nonzero()
+    assert np.max(np.abs(i - j)) <= d
+    full = rng.normal(size=(n, n)) * 0.05
+    out = sparse_stability_matrix(full, coefficients)
+    assert isinstance(out, np.ndarray)
+    np.testing.assert_allclose(out, stability_matrix(full, coefficients), rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("run_max", [0, 16, 10 ** 9])
+def test_a_large_ring_s_monodromy_is_the_same_with_sparse_step_matrices(monkeypatch, run_max):
+    """A mistuned 40-blade ring (160 states, sparse ``A``): the replay with sparse step matrices, runs of whole
+    steps applied step by step up to ``run_max`` long and by dense powers beyond, is the replay with dense step
+    matrices, to rounding, over a period with its contacts' events."""
+    from blademodel.numeric import contact_tangent
+    model = BladedDisk(blades=40, engine_order=3, friction="coulomb", omega=1300.0, mistuning_std=0.02,
+                       mistuning_seed=1).build()
+    ig = make_integrator(model)
+    y = np.zeros(ig.n_state)
+    status, mode, _ = ig.advance(y, ig.mode_of(y), 0, 20)
+    assert status == 0 and ig.n_physical >= contact_tangent.SPARSE_STEPS_FROM
+    start = y[:ig.n_physical].copy()
+
+    def monodromy():
+        contact_tangent._CACHES.clear()
+        return PeriodMap(ig, 1, jacobian="tangent", workers=1).derivatives(start, mode.copy())
+
+    monkeypatch.setattr(contact_tangent, "SPARSE_RUN_MAX", run_max)
+    sparse = monodromy()
+    monkeypatch.setattr(contact_tangent, "SPARSE_STEPS_FROM", 10 ** 9)
+    dense = monodromy()
+    contact_tangent._CACHES.clear()
+    assert sparse.events == dense.events >= 100
+    scale = np.maximum(np.abs(start), 1e-3 * np.max(np.abs(start)))
+    assert scaled_error(sparse.monodromy, dense.monodromy, scale) < 1e-12
 
 
 def _tangent_and_differences(ig, orbit, rel_step=1e-5):

@@ -73,6 +73,16 @@ GROUPED_FROM = 128
 #: frequency from point to point of a continuation, so the powers are reused where ``R(hA)`` is not
 #: (``benchmarks/ring_step_matrices.py``). Sparse ``A`` (larger rings) keeps Horner's rule: its powers fill in.
 POWERS_BELOW = GROUPED_FROM
+#: From this many physical states on (where ``A`` is sparse), a whole step's ``R(hA)`` is kept sparse too: its
+#: polynomial of degree ``d`` couples each blade only to the ``d`` blades either side (a 96-blade ring's RK4 step
+#: is 9 % nonzero), so the product with the monodromy's columns costs half the dense one, and a short run of
+#: whole steps is cheaper as that many sparse products than as a dense power (``benchmarks/ring_sparse_steps.py``).
+SPARSE_STEPS_FROM = 160
+#: A sparse step matrix denser than this is made dense (RK8's polynomial on a small ring fills in).
+SPARSE_STEPS_DENSITY = 0.25
+#: Runs of whole steps up to this long are applied step by step where the step matrix is sparse; longer ones by
+#: the dense power (squarings), which costs a product for each bit of the run's length.
+SPARSE_RUN_MAX = 16
 
 
 def _caches(integrator) -> dict:
@@ -107,6 +117,21 @@ def stability_matrix(hA: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
     for c in coefficients[-3::-1]:
         out = hA @ out
         out.flat[::m + 1] += c
+    return out
+
+
+def sparse_stability_matrix(hA, coefficients: np.ndarray):
+    """:func:`stability_matrix` of a sparse ``hA`` by Horner's rule in sparse products, sparse (CSR) unless it is
+    denser than :data:`SPARSE_STEPS_DENSITY` (then dense)."""
+    from scipy.sparse import csr_matrix, identity
+    hA = csr_matrix(hA)
+    eye = identity(hA.shape[0], format="csr")
+    out = coefficients[-1] * hA + coefficients[-2] * eye
+    for c in coefficients[-3::-1]:
+        out = hA @ out + c * eye
+    out = csr_matrix(out)
+    if out.nnz > SPARSE_STEPS_DENSITY * out.shape[0] * out.shape[1]:
+        return out.toarray()
     return out
 
 
@@ -180,6 +205,7 @@ class ContactTangent:
         self._powers_of_A = caches["powers"]
         # else a whole step's R(hA) by Horner's rule (as for a sparse A)
         self._whole_by_powers = self.n < POWERS_BELOW and not self._large
+        self._sparse_steps = self._large and self.n >= SPARSE_STEPS_FROM
         self._R = _Kept(KEEP_BYTES // 8)   # the step matrices R(hA) of this integrator's step
         self._powers = _Kept(KEEP_BYTES // 8)   # their powers, for runs of whole steps without events
         self._G = np.zeros_like(integrator.GS[0])
@@ -347,6 +373,8 @@ class ContactTangent:
 
     def _whole_step_matrix(self, h: float, cm, y) -> np.ndarray:
         """``R(hA)`` of the mode ``cm``: from its kept powers of ``A`` where ``A`` is dense, else by Horner's rule."""
+        if self._sparse_steps:
+            return sparse_stability_matrix(h * self.flow_matrix(cm, y), self._poly)
         if not self._whole_by_powers:
             return stability_matrix(h * self.flow_matrix(cm, y), self._poly)
         key = self._key(cm, y)
@@ -364,6 +392,8 @@ class ContactTangent:
         P = self._powers.get(key)
         if P is None:
             base, e, b = self._step_matrix(h, cm, y), m, 1
+            if hasattr(base, "toarray"):   # a sparse step's powers fill in: squared dense
+                base = base.toarray()
             while e:
                 if e & 1:
                     P = base if P is None else base @ P   # powers of one matrix commute
@@ -709,7 +739,13 @@ class ContactTangent:
                 while j < steps and not (ie < n_log and lt[ie] <= rec_t[j + 1]) and np.array_equal(rec_cm[j],
                                                                                                    rec_cm[k]):
                     j += 1
-                V = kept(self._step_power(H, cm0, rec_y[k], j - k)) @ V
+                R = self._step_matrix(H, cm0, rec_y[k]) if j - k <= SPARSE_RUN_MAX else None
+                if R is not None and hasattr(R, "toarray"):   # sparse: a short run step by step
+                    R = kept(R)
+                    for _ in range(j - k):
+                        V = R @ V
+                else:
+                    V = kept(self._step_power(H, cm0, rec_y[k], j - k)) @ V
                 k = j
                 continue
             i0 = ie
