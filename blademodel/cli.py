@@ -61,7 +61,8 @@ def _negative_values_attached(argv: Sequence[str]) -> list:
     ``--to=-1e-5``), which argparse reads as that option's value in every notation."""
     out: list = []
     for token in argv:
-        if out and _NEGATIVE_NUMBER.match(token) and out[-1].startswith("--") and "=" not in out[-1]:
+        if out and _NEGATIVE_NUMBER.match(token) and out[-1].startswith("--") and out[-1] != "--" \
+                and "=" not in out[-1]:
             out[-1] = f"{out[-1]}={token}"
         else:
             out.append(token)

@@ -427,3 +427,15 @@ def test_sweep_out_is_checked_before_any_point(capsys, tmp_path, monkeypatch, ca
     code, stdout, err = _main(capsys, ["sweep", str(ROOT / "models" / "studies" / "fig06.yaml"), "--out", str(out)])
     assert code == 2 and stdout == "" and needle in err and "Traceback" not in err
     assert not out.exists()
+
+
+def test_a_negative_number_in_exponent_notation_is_read_as_the_option_s_value():
+    """argparse before Python 3.12 takes ``-1e-5`` after an option for an option of its own; the command line
+    attaches it to the option before parsing, and leaves ``--`` and ``NAME=VALUE`` tokens as they are."""
+    assert cli._negative_values_attached(["continue", "m.yaml", "--to", "-1e-5", "--from", "-2.5E+3", "--", "-1e-3",
+                                          "--set", "gap=-1e-5", "--period", "2"]) == \
+        ["continue", "m.yaml", "--to=-1e-5", "--from=-2.5E+3", "--", "-1e-3", "--set", "gap=-1e-5", "--period", "2"]
+    args = cli.build_parser().parse_args(cli._negative_values_attached(
+        ["continue", "m.yaml", "--param", "gap", "--from", "1e-5", "--to", "-1e-5"]))
+    assert args.start == 1e-5 and args.stop == -1e-5
+

@@ -78,7 +78,7 @@ POWERS_BELOW = GROUPED_FROM
 #: is 9 % nonzero), so the product with the monodromy's columns costs half the dense one, and a short run of
 #: whole steps is cheaper as that many sparse products than as a dense power (``benchmarks/ring_sparse_steps.py``).
 SPARSE_STEPS_FROM = 160
-#: A sparse step matrix denser than this is made dense (RK8's polynomial on a small ring fills in).
+#: A sparse step matrix denser than this is made dense (RK8's polynomial, of degree 12, below about 100 blades).
 SPARSE_STEPS_DENSITY = 0.25
 #: Runs of whole steps up to this long are applied step by step where the step matrix is sparse; longer ones by
 #: the dense power (squarings), which costs a product for each bit of the run's length.
@@ -739,7 +739,8 @@ class ContactTangent:
                 while j < steps and not (ie < n_log and lt[ie] <= rec_t[j + 1]) and np.array_equal(rec_cm[j],
                                                                                                    rec_cm[k]):
                     j += 1
-                R = self._step_matrix(H, cm0, rec_y[k]) if j - k <= SPARSE_RUN_MAX else None
+                short = self._sparse_steps and j - k <= SPARSE_RUN_MAX
+                R = self._step_matrix(H, cm0, rec_y[k]) if short else None
                 if R is not None and hasattr(R, "toarray"):   # sparse: a short run step by step
                     R = kept(R)
                     for _ in range(j - k):
