@@ -7,9 +7,12 @@ From ``GROUPED_FROM`` states on (32 blades) a mode's ``A`` is sparse, and the re
 ``R(hA)``. *Before*: ``R(hA)`` by Horner's rule, dense, so that every step with an event
 cost a dense product of the ring's size, and every run of whole steps without events the
 dense power of ``R`` by squaring and a dense product. *Now*, from ``SPARSE_STEPS_FROM``
-states on: ``R(hA)`` in sparse products, sparse (RK4's polynomial couples a blade to the
-four either side: 9 % nonzero at 96 blades), its product with the monodromy half the dense
-one's cost, and runs up to ``SPARSE_RUN_MAX`` steps applied step by step.
+states on: ``R(hA)`` sparse (its polynomial couples a blade to the four either side: 11 nonzeros a row at
+48 and 96 blades), its product with the monodromy a fraction of the dense one's cost, and runs
+up to ``SPARSE_RUN_MAX`` steps applied step by step; ``R(hA)`` assembled from the mode's kept
+powers of ``A`` on their common pattern (one combination of their values), or (*sparse,
+Horner*, measured beside it) by Horner's rule in sparse products at every replay, as the
+step moves from point to point.
 
 Three continuations of ``models/bladed_disk_24.yaml`` in ``omega``, before and now, repeats
 interleaved, minimum CPU time of the process (BLAS threads included): mistuned rings
@@ -47,9 +50,18 @@ CASES = {
 }
 
 
-def now(on: bool) -> None:
-    """Sparse step matrices (``on``, the default) or dense ones (before); caches emptied."""
-    contact_tangent.SPARSE_STEPS_FROM = _SPARSE_FROM if on else 10 ** 9
+_KEPT_POWERS = contact_tangent.ContactTangent._whole_step_matrix
+
+
+def _horner(self, h, cm, y):
+    return contact_tangent.sparse_stability_matrix(h * self.flow_matrix(cm, y), self._poly)
+
+
+def now(way: str) -> None:
+    """Step matrices ``"dense"`` (before), ``"horner"`` (sparse, by Horner's rule) or ``"powers"`` (sparse, from
+    kept powers: the default); caches emptied."""
+    contact_tangent.SPARSE_STEPS_FROM = 10 ** 9 if way == "dense" else _SPARSE_FROM
+    contact_tangent.ContactTangent._whole_step_matrix = _horner if way == "horner" else _KEPT_POWERS
     contact_tangent._CACHES.clear()
 
 
@@ -80,21 +92,25 @@ def main() -> int:
         run(overrides, {**opts, "max_points": 2})   # compile (or load) the kernel before timing
         branches = {}
 
-        def timed(on):
-            now(on)
-            branches[on] = run(overrides, opts)
+        def timed(way):
+            now(way)
+            branches[way] = run(overrides, opts)
 
-        times = C.interleaved({"before": lambda: timed(False), "now": lambda: timed(True)}, args.repeats,
-                              clock=time.process_time)
-        now(True)
-        b = branches[True]
+        ways = ("dense", "horner", "powers")
+        times = C.interleaved({w: (lambda w=w: timed(w)) for w in ways}, args.repeats, clock=time.process_time)
+        now("powers")
+        b = branches["powers"]
+        t = {w: min(times[w]) for w in ways}
         rows.append({"case": name, "states": int(b.states.shape[1]), "points": int(b.params.size),
-                     "replays": int(b.replays), "before_s": min(times["before"]), "now_s": min(times["now"]),
-                     "gain": min(times["before"]) / min(times["now"]), "difference": same(b, branches[False])})
+                     "replays": int(b.replays), "before_s": t["dense"], "horner_s": t["horner"], "now_s": t["powers"],
+                     "gain_horner": t["dense"] / t["horner"], "gain": t["dense"] / t["powers"],
+                     "difference": max(same(b, branches["dense"]), same(b, branches["horner"]))})
         print(f"  {name}: {rows[-1]['gain']:.2f} x", flush=True)
     print(C.table(rows, [("case", "ring", "s"), ("states", "states", "d"), ("points", "points", "d"),
-                         ("replays", "replays", "d"), ("before_s", "dense s", ".1f"), ("now_s", "sparse s", ".1f"),
-                         ("gain", "gain", ".2f"), ("difference", "branches differ by", ".1e")]))
+                         ("replays", "replays", "d"), ("before_s", "dense s", ".1f"),
+                         ("horner_s", "sparse, Horner s", ".1f"), ("now_s", "sparse, kept powers s", ".1f"),
+                         ("gain_horner", "gain, Horner", ".2f"), ("gain", "gain", ".2f"),
+                         ("difference", "branches differ by", ".1e")]))
     print(f"(continuation in omega, CPU time of the process, min of {args.repeats} interleaved repeats, the first "
           "orbit included; the difference: field values and leading multipliers' moduli, relative to the largest)")
     result = {"benchmark": "ring_sparse_steps", "repeats": args.repeats, "rows": rows,

@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 from blademodel.config import BladedDisk
-from blademodel.numeric.contact_tangent import (amplification_powers, sparse_stability_matrix, stability_matrix,
-                                                stability_matrix_from_powers)
+from blademodel.numeric.contact_tangent import (amplification_powers, sparse_amplification_powers,
+                                                sparse_stability_matrix, sparse_stability_matrix_from_powers,
+                                                stability_matrix, stability_matrix_from_powers)
 from blademodel.numeric.methods import get_method
 from blademodel.numeric.tangent import SensitivityError
 from blademodel.numeric.kernels import make_integrator
@@ -114,6 +115,31 @@ def test_a_sparse_step_matrix_is_horner_s_and_keeps_the_band_of_its_polynomial(n
     out = sparse_stability_matrix(full, coefficients)
     assert isinstance(out, np.ndarray)
     np.testing.assert_allclose(out, stability_matrix(full, coefficients), rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("name", ["rk4", "rk8"])
+def test_a_sparse_step_matrix_from_kept_powers_is_horner_s_at_any_step(name):
+    """A sparse ``A``'s powers kept on their common pattern give Horner's sparse ``R(hA)`` at every step, to
+    rounding, on the pattern of the whole polynomial: a ring-like ``A`` (closed, so the band wraps round) whose
+    square cancels exactly where two paths meet (kept on the pattern all the same)."""
+    from scipy.sparse import csr_matrix
+    coefficients = get_method(name).amplification_coefficients()
+    n = 40
+    rng = np.random.default_rng(11)
+    A = np.zeros((n, n))
+    for i in range(n):
+        A[i, (i + 1) % n], A[i, (i - 1) % n], A[i, i] = rng.normal(size=3)
+    A[0, 0], A[1, 1] = 1.0, -1.0   # (A^2)[0, 1] = A[0, 1] (A[0, 0] + A[1, 1]) = 0
+    assert (A @ A)[0, 1] == 0.0
+    powers = sparse_amplification_powers(csr_matrix(A), coefficients.size - 1)
+    for h in (0.3, 0.0217, 1e-9):
+        R = sparse_stability_matrix_from_powers(powers, h, coefficients)
+        ref = sparse_stability_matrix(csr_matrix(h * A), coefficients)
+        ref = ref.toarray() if hasattr(ref, "toarray") else ref
+        np.testing.assert_allclose(R.toarray(), ref, rtol=0, atol=1e-14 * np.max(np.abs(ref)))
+        np.testing.assert_allclose(R.toarray(), stability_matrix(h * A, coefficients), rtol=0,
+                                   atol=1e-14 * np.max(np.abs(ref)))
+    assert R.nnz == n * min(n, 2 * (coefficients.size - 1) + 1)   # the band of the polynomial, wrapped round
 
 
 @pytest.mark.parametrize("run_max", [0, 16, 10 ** 9])

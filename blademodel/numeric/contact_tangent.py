@@ -56,7 +56,8 @@ from .tangent import SensitivityError
 _CACHES: OrderedDict = OrderedDict()
 _KEEP = 4
 #: The most bytes the modes' matrices ``A`` of one model may hold; the guard gradients, clusters, projections and
-#: resets get an eighth of it each, the powers of ``A`` (:data:`POWERS_BELOW`) and of its blocks a quarter.
+#: resets get an eighth of it each, the powers of ``A`` (:data:`POWERS_BELOW`) and of its blocks a quarter, and a
+#: sparse ``A``'s powers on their pattern (:data:`SPARSE_STEPS_FROM`) another quarter.
 #: A long continuation of a ring meets thousands of modes (4888 on the
 #: 24-blade ring from 270 to 300 rad/s, 360 MB of dense ``A``; from :data:`GROUPED_FROM` states on they are
 #: sparse, 22-28 kB each at 96 blades, where dense they were 1.2 MB and a period's 2672 overflowed the budget).
@@ -73,10 +74,12 @@ GROUPED_FROM = 128
 #: frequency from point to point of a continuation, so the powers are reused where ``R(hA)`` is not
 #: (``benchmarks/ring_step_matrices.py``). Sparse ``A`` (larger rings) keeps Horner's rule: its powers fill in.
 POWERS_BELOW = GROUPED_FROM
-#: From this many physical states on (where ``A`` is sparse), a whole step's ``R(hA)`` is kept sparse too: its
-#: polynomial of degree ``d`` couples each blade only to the ``d`` blades either side (a 96-blade ring's RK4 step
-#: is 9 % nonzero), so the product with the monodromy's columns costs half the dense one, and a short run of
-#: whole steps is cheaper as that many sparse products than as a dense power (``benchmarks/ring_sparse_steps.py``).
+#: From this many physical states on (where ``A`` is sparse), a whole step's ``R(hA)`` is sparse too: its
+#: polynomial of degree ``d`` couples each blade only to the ``d`` blades either side (11 nonzeros a row on the
+#: 48- and 96-blade rings' RK4 steps), so its product with the monodromy's columns costs a fraction of the dense
+#: one, and a short run of whole steps is cheaper as that many sparse products than as a dense power. It is
+#: assembled from the mode's powers of ``A`` kept on their pattern (:func:`sparse_amplification_powers`): Horner's
+#: rule in sparse products costs more than a whole step's product (``benchmarks/ring_sparse_steps.py``).
 SPARSE_STEPS_FROM = 160
 #: A sparse step matrix denser than this is made dense (RK8's polynomial, of degree 12, below about 100 blades).
 SPARSE_STEPS_DENSITY = 0.25
@@ -92,7 +95,7 @@ def _caches(integrator) -> dict:
                                    "clusters": _Kept(KEEP_BYTES // 8),
                                    "checked": set(), "projections": _Kept(KEEP_BYTES // 8), "pattern": [],
                                    "ungrouped": set(), "resets": _Kept(KEEP_BYTES // 8),
-                                   "powers": _Kept(KEEP_BYTES // 4)}
+                                   "powers": _Kept(KEEP_BYTES // 4), "sparse_powers": _Kept(KEEP_BYTES // 4)}
     _CACHES[key] = c
     while len(_CACHES) > _KEEP:
         _CACHES.popitem(last=False)
@@ -133,6 +136,44 @@ def sparse_stability_matrix(hA, coefficients: np.ndarray):
     if out.nnz > SPARSE_STEPS_DENSITY * out.shape[0] * out.shape[1]:
         return out.toarray()
     return out
+
+
+def sparse_amplification_powers(A, degree: int) -> tuple:
+    """``A, A^2, ..., A^degree`` of a sparse ``A`` on one pattern, that of their sum with the identity:
+    ``(P, indices, indptr, diagonal)``, ``P`` their values, a ``(degree, nnz)`` array, on the CSR pattern
+    ``indices, indptr``, and ``diagonal`` the positions of its diagonal entries."""
+    from scipy.sparse import csr_matrix, identity
+    A = csr_matrix(A)
+    n = A.shape[0]
+    powers = [A]
+    for _ in range(1, degree):
+        powers.append(A @ powers[-1])
+    pattern = identity(n, format="csr")
+    for M in powers:
+        M = M.copy()
+        M.data[:] = 1.0   # the structure (a sum could cancel an entry)
+        pattern = pattern + M
+    pattern.sort_indices()
+    rows = np.repeat(np.arange(n), np.diff(pattern.indptr))
+    keys = rows * n + pattern.indices
+    P = np.zeros((degree, keys.size))
+    for k, M in enumerate(powers):
+        M = M.tocoo()
+        P[k, np.searchsorted(keys, M.row.astype(np.int64) * n + M.col)] = M.data
+    diagonal = np.searchsorted(keys, np.arange(n) * (n + 1))
+    return P, pattern.indices.copy(), pattern.indptr.copy(), diagonal
+
+
+def sparse_stability_matrix_from_powers(powers: tuple, h: float, coefficients: np.ndarray):
+    """:func:`sparse_stability_matrix` of ``h A`` from ``A``'s powers on their pattern
+    (:func:`sparse_amplification_powers`): one combination of the scaled coefficients with them, sparse."""
+    from scipy.sparse import csr_matrix
+    P, indices, indptr, diagonal = powers
+    degree = P.shape[0]
+    n = indptr.size - 1
+    data = (coefficients[1:degree + 1] * h ** np.arange(1, degree + 1)) @ P
+    data[diagonal] += coefficients[0]
+    return csr_matrix((data, indices, indptr), shape=(n, n))
 
 
 def amplification_powers(A: np.ndarray, degree: int) -> np.ndarray:
@@ -203,6 +244,7 @@ class ContactTangent:
         # the modes' powers of A and of its blocks (the blocks themselves the first), from which R(hA) is assembled
         # at any step
         self._powers_of_A = caches["powers"]
+        self._sparse_powers = caches["sparse_powers"]   # a sparse A's, on their pattern (SPARSE_STEPS_FROM)
         # else a whole step's R(hA) by Horner's rule (as for a sparse A)
         self._whole_by_powers = self.n < POWERS_BELOW and not self._large
         self._sparse_steps = self._large and self.n >= SPARSE_STEPS_FROM
@@ -372,9 +414,14 @@ class ContactTangent:
         return stability_matrix_from_powers(self._block_powers(cm, y, rows), h, self._poly)
 
     def _whole_step_matrix(self, h: float, cm, y) -> np.ndarray:
-        """``R(hA)`` of the mode ``cm``: from its kept powers of ``A`` where ``A`` is dense, else by Horner's rule."""
+        """``R(hA)`` of the mode ``cm``: from its kept powers of ``A`` where ``A`` is dense or (sparse, from
+        :data:`SPARSE_STEPS_FROM` states on) kept on their pattern, else by Horner's rule."""
         if self._sparse_steps:
-            return sparse_stability_matrix(h * self.flow_matrix(cm, y), self._poly)
+            key = self._key(cm, y)
+            P = self._sparse_powers.get(key)
+            if P is None:
+                P = self._sparse_powers[key] = sparse_amplification_powers(self.flow_matrix(cm, y), self._poly.size - 1)
+            return sparse_stability_matrix_from_powers(P, h, self._poly)
         if not self._whole_by_powers:
             return stability_matrix(h * self.flow_matrix(cm, y), self._poly)
         key = self._key(cm, y)
