@@ -61,7 +61,7 @@ def test_the_commands_report_the_least_period(capsys):
     assert "period-2 orbit (of least period 1: the period-1 orbit run 2 times)" in capsys.readouterr().out
     assert main(["orbit", model, "--period", "2", "--set", "gamma=7.4", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["least_period"] == 2
-    assert main(["continue", model, "--param", "omega", "--from", "289", "--to", "290", "--period", "2",
+    assert main(["continue", model, "--param", "omega", "--from", "289", "--to", "290", "--periods", "2",
                  "--json"]) == 0
     rep = json.loads(capsys.readouterr().out)
     assert set(rep["least_periods"]) == {1} and len(rep["least_periods"]) == rep["points"]

@@ -36,7 +36,8 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--param", required=True, metavar="NAME", help="config field, e.g. omega (an FRF) or gamma")
     p.add_argument("--from", dest="start", type=float, required=True, metavar="A", help="start value")
     p.add_argument("--to", dest="stop", type=float, required=True, metavar="B", help="end value")
-    p.add_argument("--period", type=int, default=1, metavar="N", help="period of the orbits (default 1)")
+    p.add_argument("--period", "--periods", dest="period", type=int, default=1, metavar="N",
+                   help="period of the orbits in excitation periods (default 1; --periods as for 'orbit')")
     p.add_argument("--transient", type=int, default=20, metavar="M",
                    help="periods from rest for the first guess (default 20)")
     p.add_argument("--max-points", type=int, default=400, metavar="K", help="points at most (default 400)")
