@@ -72,7 +72,8 @@ GROUPED_FROM = 128
 #: kept powers ``A, A^2, ..., A^d`` (:func:`amplification_powers`): one combination of ``d`` arrays instead of the
 #: ``d - 1`` products of Horner's rule. ``A`` does not depend on the step, which moves with the excitation
 #: frequency from point to point of a continuation, so the powers are reused where ``R(hA)`` is not
-#: (``benchmarks/ring_step_matrices.py``). Sparse ``A`` (larger rings) keeps Horner's rule: its powers fill in.
+#: (``benchmarks/ring_step_matrices.py``). Sparse ``A`` keeps Horner's rule below :data:`SPARSE_STEPS_FROM` states,
+#: and from there its powers kept on their pattern (:func:`sparse_amplification_powers`).
 POWERS_BELOW = GROUPED_FROM
 #: From this many physical states on (where ``A`` is sparse), a whole step's ``R(hA)`` is sparse too: its
 #: polynomial of degree ``d`` couples each blade only to the ``d`` blades either side (11 nonzeros a row on the
@@ -245,7 +246,7 @@ class ContactTangent:
         # at any step
         self._powers_of_A = caches["powers"]
         self._sparse_powers = caches["sparse_powers"]   # a sparse A's, on their pattern (SPARSE_STEPS_FROM)
-        # else a whole step's R(hA) by Horner's rule (as for a sparse A)
+        # else a whole step's R(hA) from a sparse A's powers on their pattern, or by Horner's rule
         self._whole_by_powers = self.n < POWERS_BELOW and not self._large
         self._sparse_steps = self._large and self.n >= SPARSE_STEPS_FROM
         self._R = _Kept(KEEP_BYTES // 8)   # the step matrices R(hA) of this integrator's step
