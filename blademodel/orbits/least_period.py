@@ -15,7 +15,8 @@ from .shooting import LABEL_SCALE
 #: How close (scaled) the samples ``k`` periods apart must come for the orbit to have period ``k``: far above a
 #: converged orbit's residual (``1e-10``), far below the distance between the samples of a period-``n`` orbit
 #: away from the bifurcation it was born at (that distance grows as the square root of the field's distance
-#: from a period doubling: ``1e-6`` is about ``1e-12`` of the field's range from it).
+#: from a period doubling: on the bilinear pair's doubled branch in ``gamma`` about ``0.5 sqrt(distance /
+#: range)``, so ``1e-6`` within about ``4e-12`` of the range from the doubling).
 LEAST_PERIOD_TOL = 1e-6
 
 
