@@ -61,9 +61,10 @@ def register(subparsers) -> argparse.ArgumentParser:
                         "that crosses this one at each branch point (on identical blades: orbits that break their "
                         "symmetry, localised; saved beside --out as FILE_pd1.nc, ..., FILE_bp1.nc, ...; drawn on "
                         "the same --plot)")
-    p.add_argument("--quantity", choices=("harmonic", "amplitude", "section"), default="harmonic",
+    p.add_argument("--quantity", choices=("harmonic", "amplitude", "section", "reduction"), default="harmonic",
                    help="what --plot draws: first-harmonic amplitude (an FRF, default), half the peak-to-peak "
-                        "excursion, or the Poincare samples (a bifurcation diagram)")
+                        "excursion, the Poincare samples (a bifurcation diagram), or the vibration reduction P_d "
+                        "against the model without contacts (of the first mass's coordinates, in percent)")
     p.add_argument("--overlay", metavar="SWEEP.nc",
                    help="draw the first harmonics of a brute-force sweep of the same field (a 'blademodel sweep' "
                         "result file) on --plot, as dots")
@@ -231,6 +232,7 @@ def run(args: argparse.Namespace) -> int:
                              "branch point", crossing)
     state = args.state or branch.state_names[0]
     idx = state_indices(branch.state_names, state, "--state")
+    reduction, unreduced = _reduction(branch, config)
     if args.plot:
         from ..plots.branch import branch_figure
         overlay = None
@@ -239,7 +241,13 @@ def run(args: argparse.Namespace) -> int:
         drawn = [(branch, f"period {branch.periods}")]
         drawn += [(b, f"doubled at {k}") for k, b in enumerate(doubled, 1) if b is not None]
         drawn += [(b, f"crossing at branch point {k}") for k, b in enumerate(branched, 1) if b is not None]
-        branch_figure([b for b, _ in drawn], state, quantity=args.quantity, overlay=overlay,
+        values = None
+        if args.quantity == "reduction":
+            if reduction is None:
+                raise ValueError(f"--quantity reduction: {unreduced}")
+            values = [reduction] + [_reduction(b, config)[0] for b, _ in drawn[1:]]
+        branch_figure([b for b, _ in drawn], ", ".join(_observed(config)) if values is not None else state,
+                      quantity=args.quantity, overlay=overlay, values=values,
                       labels=[label for _, label in drawn] if len(drawn) > 1 else None).savefig(args.plot, dpi=120)
     spread = envelope(branch.harmonics, idx)
     largest, smallest, which = spread
@@ -248,6 +256,7 @@ def run(args: argparse.Namespace) -> int:
            "values": branch.params.tolist(),
            "harmonic1": largest.tolist(), "stable": branch.stable.tolist(),
            "least_periods": branch_least_periods(branch).tolist(),
+           "P_d": None if reduction is None else reduction.tolist(),
            "special": [{"kind": p.kind, "value": p.param, "multiplier": [p.multiplier.real, p.multiplier.imag],
                         "bracket": None if p.bracket is None else list(p.bracket)}
                        for p in branch.special], "state": state,
@@ -263,6 +272,11 @@ def run(args: argparse.Namespace) -> int:
           f"{branch.integrations} integrations of the period map and {branch.replays} tangent replays"
           f"{_run_again(branch, args.param)}")
     print(_peak(branch, state, idx, spread, args.param))
+    if reduction is not None and np.isfinite(reduction).any():
+        k = int(np.nanargmax(reduction))
+        print(f"  vibration reduction P_d of {', '.join(_observed(config))}: {np.nanmin(reduction):.4g} % to "
+              f"{reduction[k]:.4g} % (the largest at {args.param} = {branch.params[k]:.8g}, "
+              f"{'stable' if branch.stable[k] else 'unstable'})")
     for p in branch.special:
         if p.kind == "gap":
             print(f"  gap: no orbit found between {args.param} = {p.bracket[0]:.8g} and {p.bracket[1]:.8g}; the branch "
@@ -285,6 +299,23 @@ def run(args: argparse.Namespace) -> int:
         if name:
             print(f"{what} {name}")
     return 0
+
+
+def _observed(config) -> list:
+    """The coordinates ``P_d`` sums: the first mass's (as sweeps observe)."""
+    return list(config.build().masses[0].coordinates)
+
+
+def _reduction(b, config) -> tuple:
+    """``(P_d at each point of b, None)``, or ``(None, why)`` where the model without contacts has no closed-form
+    steady state (:func:`~blademodel.orbits.branch_reduction.branch_vibration_reduction`)."""
+    from ..orbits.branch_reduction import branch_vibration_reduction
+    if b is None:
+        return None, "no branch"
+    try:
+        return branch_vibration_reduction(b, config), None
+    except ValueError as e:
+        return None, str(e)
 
 
 def _run_again(b, param: str) -> str:

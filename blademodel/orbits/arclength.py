@@ -407,12 +407,15 @@ def _assemble(ctx, pts, special, message: str, before: Branch | None, complete: 
                residuals=np.array([p["residual"] for p in pts]),
                sections=np.array([p["sections"] for p in pts]), special=list(special),
                state_names=fam.state_names()[:ctx.n], message=message, integrations=integrations,
-               replays=replays, modes=np.array([_mode_row(p["mode"]) for p in pts]), complete=complete)
+               replays=replays, modes=np.array([_mode_row(p["mode"]) for p in pts]), complete=complete,
+               mean_squares=np.array([p["ms"] for p in pts]))
     if before is None:
         return b
     k = before.params.size - 1   # before's last point is this run's first
     if before.modes.shape != (k + 1, b.modes.shape[1]):   # unknown (a file written before modes were kept)
         before = replace(before, modes=np.full((k + 1, b.modes.shape[1]), -1, dtype=np.int64))
+    if before.mean_squares.shape != (k + 1, b.mean_squares.shape[1]):   # unknown (a file written before they were)
+        before = replace(before, mean_squares=np.full((k + 1, b.mean_squares.shape[1]), np.nan))
     return replace(b, **{f: np.concatenate([np.asarray(getattr(before, f))[:k], getattr(b, f)]) for f in _PER_POINT},
                    special=list(before.special) + [replace(q, index=q.index + k) for q in special],
                    integrations=before.integrations + integrations, replays=before.replays + replays)
@@ -420,7 +423,7 @@ def _assemble(ctx, pts, special, message: str, before: Branch | None, complete: 
 
 #: The fields of :class:`Branch` that hold one entry per point.
 _PER_POINT = ("params", "states", "multipliers", "stable", "amplitudes", "harmonics", "events", "residuals",
-              "sections", "modes")
+              "sections", "modes", "mean_squares")
 
 
 def _no_first_orbit(e: ShootingError, name: str, at: float, periods: int, transient: int,

@@ -110,6 +110,11 @@ class Branch:
         one per contact on the per-contact kernel (what a resumed continuation starts
         its first orbit in); ``-1`` where unknown (points from a file written before
         modes were kept).
+    mean_squares : ndarray, shape (points, states)
+        Each state's time-mean square over the orbit (its closing sample left out): the
+        ``P`` of the vibration reduction ``P_d``
+        (:func:`~blademodel.orbits.branch_reduction.branch_vibration_reduction`); NaN in
+        points from a file written before they were kept.
     complete : bool
         False for a branch saved or returned before its continuation ended (a
         checkpoint, or after Ctrl-C): :func:`~.arclength.continuation` resumes it (``resume``).
@@ -133,6 +138,7 @@ class Branch:
     replays: int = 0
     modes: np.ndarray = field(default_factory=lambda: np.zeros((0, 1), dtype=np.int64))
     complete: bool = True
+    mean_squares: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     def points(self, kind: str) -> list:
         """The special points of one kind."""

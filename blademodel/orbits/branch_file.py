@@ -85,7 +85,10 @@ def save_branch(branch: Branch, path, config=None, run: dict | None = None) -> N
         for name, data, long in (("section_state", branch.states, "state at t = 0 (SI units)"),
                                  ("amplitude", branch.amplitudes, "half the peak-to-peak excursion over the orbit"),
                                  ("harmonic1_abs", np.abs(branch.harmonics), "first-harmonic amplitude"),
-                                 ("harmonic1_phase", np.angle(branch.harmonics), "first-harmonic phase, rad")):
+                                 ("harmonic1_phase", np.angle(branch.harmonics), "first-harmonic phase, rad"),
+                                 *([("mean_square", branch.mean_squares, "time-mean square over the orbit "
+                                     "(SI units squared; the P of P_d)")]
+                                   if branch.mean_squares.shape == branch.states.shape else [])):
             v = ds.createVariable(name, "f8", ("point", "state"))
             v[:] = data
             v.long_name = long
@@ -172,7 +175,9 @@ def load_branch(path) -> Branch:
                       integrations=int(getattr(ds, "integrations", 0)), replays=int(getattr(ds, "replays", 0)),
                       modes=ds["section_mode"][:].data.astype(np.int64) if "section_mode" in ds.variables
                       else np.zeros((0, 1), dtype=np.int64),
-                      complete=bool(getattr(ds, "complete", 1)))
+                      complete=bool(getattr(ds, "complete", 1)),
+                      mean_squares=ds["mean_square"][:].data.copy() if "mean_square" in ds.variables
+                      else np.full(ds["section_state"].shape, np.nan))
 
 
 def _bracket(ds, i: int) -> tuple | None:

@@ -445,10 +445,11 @@ class _Context:
         rows = np.ascontiguousarray(Y.T)
         top, bottom = rows.max(axis=1), rows.min(axis=1)
         amp = 0.5 * (top - bottom)
+        ms = np.einsum("ij,ij->i", rows[:, :-1], rows[:, :-1]) / (rows.shape[1] - 1)   # (the closing sample left out)
         c = dft_bin(Y[:-1], self.fam.periods) * 2.0 / (Y.shape[0] - 1)
         S = (Y.shape[0] - 1) // self.fam.periods
         return {"param": lam, "state": y, "sections": Y[:-1:S].copy(), "mu": mu,
-                "stable": bool(np.max(np.abs(mu)) < 1.0), "amp": amp,
+                "stable": bool(np.max(np.abs(mu)) < 1.0), "amp": amp, "ms": ms,
                 "h1": c, "unstable": _unstable_count(mu), "X": X.copy(), "mode": _copy(mode), "A": A, "Y": Y,
                 "events": r.events, "signature": r.signature(), "regular": True, "residual": residual,
                 "magnitude": np.maximum(top, -bottom),   # each state's largest |value| on the orbit

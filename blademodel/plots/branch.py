@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from matplotlib.figure import Figure
 
 from ..orbits.branch_states import alike, envelope, state_indices
@@ -30,7 +32,7 @@ COLOURS = [("C0", "C3"), ("C2", "C1"), ("C4", "C6"), ("C9", "C5")]
 
 
 def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", overlay=None, ax=None,
-                  labels=None) -> Figure:
+                  labels=None, values=None) -> Figure:
     """Forced-response or bifurcation plot of a :class:`~blademodel.orbits.Branch` (or several).
 
     Parameters
@@ -43,16 +45,20 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
         of the states it matches at each point is drawn as one state would be, the smallest
         as a thin line unless they are alike throughout (a tuned ring's travelling waves)
         (:mod:`~blademodel.orbits.branch_states`; not for ``"section"``).
-    quantity : {"harmonic", "amplitude", "section"}
+    quantity : {"harmonic", "amplitude", "section", "reduction"}
         First-harmonic amplitude (of the excitation frequency), half the peak-to-peak
-        excursion over the orbit, or the Poincare samples ``state(k T)`` (a bifurcation
-        diagram: a period-2 orbit draws two curves).
+        excursion over the orbit, the Poincare samples ``state(k T)`` (a bifurcation
+        diagram: a period-2 orbit draws two curves), or the vibration reduction ``P_d`` in
+        percent, given in ``values`` (``state`` then names what it sums, for the label).
     overlay : tuple of arrays, optional
         ``(values, amplitudes)`` of a brute-force sweep, drawn as dots.
     ax : matplotlib Axes, optional
         Draw into these axes (of a figure with several panels) instead of a new figure.
     labels : list of str, optional
         What each branch is, for the legend (default, with several: its period).
+    values : list of ndarray, optional
+        With ``quantity="reduction"``: each branch's ``P_d`` at its points
+        (:func:`~blademodel.orbits.branch_reduction.branch_vibration_reduction`).
     """
     branches = list(branch) if isinstance(branch, (list, tuple)) else [branch]
     own = ax is None
@@ -64,10 +70,14 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
     if labels is not None and len(labels) != len(branches):
         raise ValueError(f"labels: one per branch ({len(branches)}), got {len(labels)}")
     several = False
+    if quantity == "reduction" and (values is None or len(values) != len(branches)):
+        raise ValueError("quantity 'reduction': give each branch's P_d in values")
     for j, (b, (c_stable, c_unstable)) in enumerate(zip(branches, COLOURS * len(branches))):
-        idx = state_indices(b.state_names, state)
+        idx = state_indices(b.state_names, state) if quantity != "reduction" else [0]
         several = len(idx) > 1
-        if quantity == "section":
+        if quantity == "reduction":
+            curves = [np.asarray(values[j], dtype=float)]
+        elif quantity == "section":
             if several:
                 raise ValueError(f"state {state!r}: the Poincare samples are drawn for one state, and the pattern "
                                  f"matches {len(idx)}")
@@ -104,10 +114,14 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
                 marked.add(kind)
     if overlay is not None:
         ax.plot(overlay[0], overlay[1], ".", color="0.5", ms=3, label="integration")
-    what = {"harmonic": "first-harmonic amplitude", "amplitude": "amplitude", "section": "Poincare samples"}[quantity]
+    what = {"harmonic": "first-harmonic amplitude", "amplitude": "amplitude", "section": "Poincare samples",
+            "reduction": "vibration reduction P_d"}[quantity]
     first = branches[0]
     ax.set_xlabel(first.field)
-    ax.set_ylabel(f"{what} of {state}" if not several else f"{what}, largest of {state}")
+    if quantity == "reduction":
+        ax.set_ylabel(f"vibration reduction P_d of {state}, %")
+    else:
+        ax.set_ylabel(f"{what} of {state}" if not several else f"{what}, largest of {state}")
     periods = sorted({b.periods for b in branches})
     unfinished = " (unfinished: " + first.message + ")" if not first.complete else ""
     ax.set_title(f"period-{'/'.join(str(p) for p in periods)} orbits continued in {first.field}{unfinished}")
