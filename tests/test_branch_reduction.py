@@ -119,3 +119,13 @@ def test_a_tuned_ring_s_mean_squares_on_the_reduced_map_are_the_whole_orbit_s():
     assert np.max(np.abs(b.mean_squares[1] - whole)) < 1e-12 * np.max(whole)
     x = b.mean_squares[1][[b.state_names.index(f"x{i}") for i in range(1, 25)]]
     assert np.ptp(x) < 1e-12 * np.max(x)
+
+
+def test_the_orbit_command_reports_the_p_d_of_its_orbit(capsys):
+    """``blademodel orbit`` at gamma = 4 reports the P_d that the branch's first point at gamma = 4 has."""
+    cfg = BladePair(friction="bilinear")
+    b = continuation(cfg, "gamma", 4.0, 4.05, max_points=2, workers=1)
+    model = str(MODELS / "blade_pair_bilinear.yaml")
+    assert main(["orbit", model, "--set", "gamma=4", "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert abs(rep["P_d"] - branch_vibration_reduction(b, cfg)[0]) < 1e-8

@@ -77,6 +77,7 @@ def run(args: argparse.Namespace) -> int:
     mode = orbit.mode
     mode_name = ig.mode_label(mode) if isinstance(mode, np.ndarray) else ig.mode_names[int(mode)]
     rep = report(orbit, mode_name)
+    rep["P_d"], why = _reduction(orbit, model)
     if args.json:
         print(jsonout.dumps(rep))
         return 0
@@ -89,4 +90,21 @@ def run(args: argparse.Namespace) -> int:
           f"{len(orbit.history) - 1} Newton steps, scaled residual {orbit.residual:.2g}")
     print(f"state at t = 0 ({mode_name}): " + ", ".join(f"{k}={v:.6g}" for k, v in rep["state"].items()))
     print("amplitudes: " + ", ".join(f"{k}={v:.6g}" for k, v in rep["amplitudes"].items()))
+    names = ", ".join(model.masses[0].coordinates)
+    print(f"vibration reduction P_d of {names}: {rep['P_d']:.4g} %" if rep["P_d"] is not None else
+          f"vibration reduction P_d: none ({why})")
     return 0
+
+
+def _reduction(orbit, model) -> tuple:
+    """``(P_d in percent, None)`` of the orbit against the model without contacts in closed form, or
+    ``(None, why)`` (:func:`~blademodel.analysis.contact_free.contact_free_mean_squares`)."""
+    from ..analysis.contact_free import contact_free_mean_squares
+    from ..analysis.reduction import mean_square, vibration_reduction
+    names = list(model.masses[0].coordinates)
+    try:
+        ms0 = contact_free_mean_squares(model)
+    except ValueError as e:
+        return None, str(e)
+    P = mean_square(orbit.y, orbit.state_names, names)
+    return vibration_reduction(P, sum(ms0[n] for n in names)), None
