@@ -104,10 +104,15 @@ forces: [{mass: m, amplitude: 1.0, omega: omega}]
     capsys.readouterr()
     assert main(["plot", str(branch_nc)]) == 0
     png = tmp_path / "branch_branch.png"
-    assert capsys.readouterr().out.split() == [str(png)]
-    image = imread(png)
-    assert image.shape[0] > 100 and image[..., :3].std() > 0.01   # drawn, not blank
+    assert capsys.readouterr().out.split() == [str(png), str(tmp_path / "branch_reduction.png")]
+    for drawn in (png, tmp_path / "branch_reduction.png"):
+        image = imread(drawn)
+        assert image.shape[0] > 100 and image[..., :3].std() > 0.01   # drawn, not blank
     branch = load_branch(branch_nc)
+    # no contacts: the orbits are the reference's own, P_d zero but for RK4's error at 200 steps a period
+    from blademodel.commands.plot import _branch_reduction
+    names, pd = _branch_reduction(branch_nc, branch)
+    assert names == "x_m" and np.max(np.abs(pd)) < 1e-4
     # the exact linear FRF at the branch's ends: |X| = F0 / sqrt((k - m w^2)^2 + (c w)^2)
     w = branch.params
     exact = 1.0 / np.sqrt((100.0 - w ** 2) ** 2 + (0.5 * w) ** 2)

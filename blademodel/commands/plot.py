@@ -38,7 +38,9 @@ def run(args: argparse.Namespace) -> int:
 
 def plot_branch(path: Path, out_dir=None, state: str | None = None) -> list[Path]:
     """The forced response (first harmonic of ``state``, a name or a pattern; default the first coordinate) of a
-    branch file: ``<stem>_branch.png``."""
+    branch file, ``<stem>_branch.png``, and its vibration reduction ``P_d``, ``<stem>_reduction.png`` (where the
+    file keeps its orbits' mean squares and its config, and the model without contacts has a closed-form steady
+    state)."""
     import matplotlib.pyplot as plt
 
     from ..orbits.branch_file import load_branch
@@ -53,4 +55,31 @@ def plot_branch(path: Path, out_dir=None, state: str | None = None) -> list[Path
     out = folder / f"{path.stem}_branch.png"
     fig.savefig(out, dpi=120)
     plt.close(fig)
-    return [out]
+    written = [out]
+    reduction = _branch_reduction(path, branch)
+    if reduction is not None:
+        names, values = reduction
+        fig = branch_figure(branch, names, quantity="reduction", values=[values])
+        written.append(folder / f"{path.stem}_reduction.png")
+        fig.savefig(written[-1], dpi=120)
+        plt.close(fig)
+    return written
+
+
+def _branch_reduction(path: Path, branch) -> tuple | None:
+    """``(what it sums, P_d at each point)`` of a branch file that keeps its orbits' mean squares and its config,
+    where the model without contacts has a closed-form steady state; else None."""
+    import numpy as np
+
+    from ..config.loading import config_from_data
+    from ..orbits.branch_file import branch_origin
+    from ..orbits.branch_reduction import branch_vibration_reduction
+    _, data = branch_origin(path)
+    if data is None or not np.isfinite(branch.mean_squares).any():
+        return None
+    config = config_from_data(data, source=str(path))
+    try:
+        values = branch_vibration_reduction(branch, config)
+    except ValueError:
+        return None
+    return ", ".join(config.build().masses[0].coordinates), values
