@@ -43,8 +43,9 @@ def plot_branch(path: Path, out_dir=None, state: str | None = None) -> list[Path
     state)."""
     import matplotlib.pyplot as plt
 
-    from ..orbits.branch_file import load_branch
+    from ..orbits.branch_file import branch_origin, load_branch
     from ..plots.branch import branch_figure
+    _, config = branch_origin(path)
     branch = load_branch(path)
     folder = Path(out_dir) if out_dir else path.parent
     folder.mkdir(parents=True, exist_ok=True)
@@ -56,7 +57,7 @@ def plot_branch(path: Path, out_dir=None, state: str | None = None) -> list[Path
     fig.savefig(out, dpi=120)
     plt.close(fig)
     written = [out]
-    reduction = _branch_reduction(path, branch)
+    reduction = _branch_reduction(config, branch, path)
     if reduction is not None:
         names, values = reduction
         fig = branch_figure(branch, names, quantity="reduction", values=[values])
@@ -66,15 +67,13 @@ def plot_branch(path: Path, out_dir=None, state: str | None = None) -> list[Path
     return written
 
 
-def _branch_reduction(path: Path, branch) -> tuple | None:
-    """``(what it sums, P_d at each point)`` of a branch file that keeps its orbits' mean squares and its config,
-    where the model without contacts has a closed-form steady state; else None."""
+def _branch_reduction(data: dict | None, branch, path: Path) -> tuple | None:
+    """``(what it sums, P_d at each point)`` of the branch of the file ``path`` that keeps its orbits' mean squares
+    and its config (``data``), where the model without contacts has a closed-form steady state; else None."""
     import numpy as np
 
     from ..config.loading import config_from_data
-    from ..orbits.branch_file import branch_origin
     from ..orbits.branch_reduction import branch_vibration_reduction
-    _, data = branch_origin(path)
     if data is None or not np.isfinite(branch.mean_squares).any():
         return None
     config = config_from_data(data, source=str(path))
