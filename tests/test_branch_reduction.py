@@ -129,3 +129,39 @@ def test_the_orbit_command_reports_the_p_d_of_its_orbit(capsys):
     assert main(["orbit", model, "--set", "gamma=4", "--json"]) == 0
     rep = json.loads(capsys.readouterr().out)
     assert abs(rep["P_d"] - branch_vibration_reduction(b, cfg)[0]) < 1e-8
+
+
+def test_a_sweep_s_p_d_is_overlaid_on_the_branch_s(tmp_path, capsys):
+    """``--quantity reduction --overlay SWEEP.nc`` draws the sweep's P_d on the branch's: the overlay is the file's
+    P_d of the config's law, which at a stable point of the branch is the branch's P_d to 1e-4 percentage points
+    (the sweep's 300 periods from rest); a sweep without P_d is refused before any continuation, naming the
+    setting that gives it."""
+    from blademodel.commands.continue_ import sweep_overlay
+    from blademodel.sweep.runner import open_result
+    study = tmp_path / "study.yaml"
+    study.write_text("name: pd\nbase: {model: blade_pair, gap: 4.0e-05, F0: 60}\nlaws: [coulomb, bilinear]\n"
+                     "sweep:\n  gamma: {start: 3.6, stop: 4.4, num: 3}\n"
+                     "run: {transient: 300, periods: 10, vibration_reduction: true}\n")
+    nc = tmp_path / "pd.nc"
+    assert main(["sweep", str(study), "--out", str(nc), "--workers", "1", "--no-plot"]) == 0
+    values, pd = sweep_overlay(nc, "gamma", 0, "bilinear", "reduction")
+    ds = open_result(nc)
+    bilinear = ds["law"].values == "bilinear"
+    np.testing.assert_array_equal(values, ds["param_gamma"].values[bilinear])
+    np.testing.assert_array_equal(pd, ds["Pd"].values[bilinear])
+    cfg = BladePair(friction="bilinear")
+    b = continuation(cfg, "gamma", 3.6, 4.4, workers=1)
+    assert abs(b.params[0] - values[0]) < 1e-12 and b.stable[0]
+    assert abs(branch_vibration_reduction(b, cfg)[0] - pd[0]) < 1e-4
+    model = str(MODELS / "blade_pair_bilinear.yaml")
+    png = tmp_path / "pd.png"
+    capsys.readouterr()
+    assert main(["continue", model, "--param", "gamma", "--from", "3.6", "--to", "4.4", "--quantity", "reduction",
+                 "--overlay", str(nc), "--plot", str(png)]) == 0 and png.stat().st_size > 0
+    plain = tmp_path / "plain.yaml"
+    plain.write_text(study.read_text().replace(", vibration_reduction: true", ""))
+    assert main(["sweep", str(plain), "--out", str(tmp_path / "plain.nc"), "--workers", "1", "--no-plot"]) == 0
+    capsys.readouterr()
+    assert main(["continue", model, "--param", "gamma", "--from", "3.6", "--to", "4.4", "--quantity", "reduction",
+                 "--overlay", str(tmp_path / "plain.nc"), "--plot", str(png)]) == 2
+    assert "holds no P_d (run it with run.vibration_reduction: true)" in capsys.readouterr().err

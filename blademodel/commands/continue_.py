@@ -66,8 +66,8 @@ def register(subparsers) -> argparse.ArgumentParser:
                         "excursion, the Poincare samples (a bifurcation diagram), or the vibration reduction P_d "
                         "against the model without contacts (of the first mass's coordinates, in percent)")
     p.add_argument("--overlay", metavar="SWEEP.nc",
-                   help="draw the first harmonics of a brute-force sweep of the same field (a 'blademodel sweep' "
-                        "result file) on --plot, as dots")
+                   help="draw the first harmonics (or with --quantity reduction the P_d) of a brute-force sweep of "
+                        "the same field (a 'blademodel sweep' result file) on --plot, as dots")
     p.add_argument("--state", default=None,
                    help="state plotted and reported (default: the first coordinate); a pattern such as 'x*' "
                         "(quoted) stands for the largest of the states it matches at each point, and --plot draws "
@@ -100,30 +100,38 @@ def _reporter(label: str, param: str):
     return progress
 
 
-def sweep_overlay(path, field: str, states, law: str | None = None) -> tuple:
+def sweep_overlay(path, field: str, states, law: str | None = None, quantity: str = "harmonic") -> tuple:
     """``(values, first-harmonic amplitudes)`` from a sweep result file over ``field``: of the state index
     ``states``, or the largest of those of a list of them at each point
-    (:func:`~blademodel.orbits.branch_states.envelope`).
+    (:func:`~blademodel.orbits.branch_states.envelope`); with ``quantity="reduction"``, ``(values, P_d)``
+    (``states`` unused).
 
-    Only the finished, successful points; with several laws in the file, those of ``law``.
+    Only the finished, successful points (and for ``P_d`` those where it is defined); with several laws in the
+    file, those of ``law``.
 
     Raises
     ------
     ValueError
-        If the file did not sweep ``field`` or holds no first harmonics (written before they were stored).
+        If the file did not sweep ``field`` or holds no first harmonics (written before they were stored), or
+        no ``P_d`` (a sweep run without ``vibration_reduction``).
     """
     from ..sweep.runner import open_result
     ds = open_result(path)
     if f"param_{field}" not in ds:
         raise ValueError(f"--overlay {path}: the sweep did not vary {field!r} (it varied "
                          f"{', '.join(ds.attrs['fields'])})")
-    if "harmonic1" not in ds:
+    if quantity == "reduction" and ("Pd" not in ds or not np.isfinite(ds["Pd"].values).any()):
+        raise ValueError(f"--overlay {path}: the sweep holds no P_d (run it with run.vibration_reduction: true)")
+    if quantity != "reduction" and "harmonic1" not in ds:
         raise ValueError(f"--overlay {path}: the file holds no first harmonics (written by an older blademodel); "
                          f"run the sweep again")
     ok = (ds["done"].values == 1) & (ds["error"].values == "")
     laws = set(ds["law"].values[ok])
     if law is not None and len(laws) > 1:
         ok &= ds["law"].values == law
+    if quantity == "reduction":
+        ok &= np.isfinite(ds["Pd"].values)
+        return ds[f"param_{field}"].values[ok], ds["Pd"].values[ok]
     columns = [int(k) for k in np.atleast_1d(states)]
     return ds[f"param_{field}"].values[ok], envelope(ds["harmonic1"].values[ok], columns)[0]
 
@@ -157,9 +165,10 @@ def run(args: argparse.Namespace) -> int:
     if args.overlay:
         if not args.plot:
             raise ValueError("--overlay draws on the plot: give --plot FILE.png too")
-        if args.quantity != "harmonic":
-            raise ValueError("--overlay holds first harmonics: use it with --quantity harmonic")
-        sweep_overlay(args.overlay, args.param, 0)   # the file's checks, before the continuation
+        if args.quantity not in ("harmonic", "reduction"):
+            raise ValueError("--overlay draws a sweep's first harmonics or its P_d: use it with --quantity harmonic "
+                             "or reduction")
+        sweep_overlay(args.overlay, args.param, 0, quantity=args.quantity)   # the file's checks, before the run
     config, _ = config_and_model(args)
     run_settings = {k: getattr(args, k) for k in _RUN_OPTIONS}
     if args.grazing_tol is not None:   # (files written without it stay this command's own at the default)
@@ -237,7 +246,7 @@ def run(args: argparse.Namespace) -> int:
         from ..plots.branch import branch_figure
         overlay = None
         if args.overlay:
-            overlay = sweep_overlay(args.overlay, args.param, idx, getattr(config, "friction", None))
+            overlay = sweep_overlay(args.overlay, args.param, idx, getattr(config, "friction", None), args.quantity)
         drawn = [(branch, f"period {branch.periods}")]
         drawn += [(b, f"doubled at {k}") for k, b in enumerate(doubled, 1) if b is not None]
         drawn += [(b, f"crossing at branch point {k}") for k, b in enumerate(branched, 1) if b is not None]
