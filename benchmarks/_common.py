@@ -58,6 +58,26 @@ def write_json(name: str, data: dict) -> Path:
     return path
 
 
+def ring_continuation(overrides: dict, opts: dict):
+    """A continuation in ``omega`` of ``models/bladed_disk_24.yaml`` with the config ``overrides`` (strings, as
+    ``--set`` takes them); ``opts``: ``start``, ``stop`` and :func:`~blademodel.orbits.continuation`'s keywords."""
+    from blademodel.config import apply_overrides, load_config
+    from blademodel.orbits import continuation
+    cfg = apply_overrides(load_config(ROOT / "models" / "bladed_disk_24.yaml"), overrides)
+    o = dict(opts)
+    return continuation(cfg, "omega", o.pop("start"), o.pop("stop"), **o)
+
+
+def finish(name: str, rows: list, repeats: int, t0: float, agree: float = 1e-7) -> int:
+    """Write the ``rows`` of benchmark ``name`` (with the repeats, the machine and the time since ``t0``) to
+    ``docs/benchmarks/<name>.json``; the exit code: 0 where every row's ``difference`` (of the two ways' branches)
+    is within ``agree``."""
+    result = {"benchmark": name, "repeats": repeats, "rows": rows, "machine": machine(),
+              "elapsed_s": time.time() - t0}
+    print(f"written {write_json(name, result)}")
+    return 0 if all(r["difference"] <= agree for r in rows) else 1
+
+
 def _default(o):
     if isinstance(o, (np.integer,)):
         return int(o)

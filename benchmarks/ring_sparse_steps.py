@@ -34,9 +34,7 @@ import numpy as np
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parent))
 import _common as C  # noqa: E402
 
-from blademodel.config import apply_overrides, load_config  # noqa: E402
 from blademodel.numeric import contact_tangent  # noqa: E402
-from blademodel.orbits import continuation  # noqa: E402
 
 _SPARSE_FROM = contact_tangent.SPARSE_STEPS_FROM
 
@@ -65,12 +63,6 @@ def now(way: str) -> None:
     contact_tangent._CACHES.clear()
 
 
-def run(overrides, opts):
-    cfg = apply_overrides(load_config(C.ROOT / "models" / "bladed_disk_24.yaml"), overrides)
-    o = dict(opts)
-    return continuation(cfg, "omega", o.pop("start"), o.pop("stop"), **o)
-
-
 def same(a, b) -> float:
     """The largest difference of two branches' field values and leading multipliers' moduli, relative to the
     largest (inf where their points differ in number)."""
@@ -89,12 +81,12 @@ def main() -> int:
     t0 = time.time()
     rows = []
     for name, (overrides, opts) in CASES.items():
-        run(overrides, {**opts, "max_points": 2})   # compile (or load) the kernel before timing
+        C.ring_continuation(overrides, {**opts, "max_points": 2})   # compile (or load) the kernel before timing
         branches = {}
 
         def timed(way):
             now(way)
-            branches[way] = run(overrides, opts)
+            branches[way] = C.ring_continuation(overrides, opts)
 
         ways = ("dense", "horner", "powers")
         times = C.interleaved({w: (lambda w=w: timed(w)) for w in ways}, args.repeats, clock=time.process_time)
@@ -113,10 +105,7 @@ def main() -> int:
                          ("difference", "branches differ by", ".1e")]))
     print(f"(continuation in omega, CPU time of the process, min of {args.repeats} interleaved repeats, the first "
           "orbit included; the difference: field values and leading multipliers' moduli, relative to the largest)")
-    result = {"benchmark": "ring_sparse_steps", "repeats": args.repeats, "rows": rows,
-              "machine": C.machine(), "elapsed_s": time.time() - t0}
-    print(f"written {C.write_json('ring_sparse_steps', result)}")
-    return 0 if all(r["difference"] <= 1e-7 for r in rows) else 1
+    return C.finish("ring_sparse_steps", rows, args.repeats, t0)
 
 
 if __name__ == "__main__":

@@ -32,9 +32,7 @@ import numpy as np
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parent))
 import _common as C  # noqa: E402
 
-from blademodel.config import apply_overrides, load_config  # noqa: E402
 from blademodel.numeric import contact_tangent  # noqa: E402
-from blademodel.orbits import continuation  # noqa: E402
 
 _POWERS_BELOW = contact_tangent.POWERS_BELOW
 
@@ -52,9 +50,7 @@ def now(on: bool) -> None:
 
 
 def run(overrides, opts):
-    cfg = apply_overrides(load_config(C.ROOT / "models" / "bladed_disk_24.yaml"), overrides)
-    o = dict(opts)
-    return continuation(cfg, "omega", o.pop("start"), o.pop("stop"), max_points=400, workers=1, **o)
+    return C.ring_continuation(overrides, {"max_points": 400, "workers": 1, **opts})
 
 
 def same(a, b) -> float:
@@ -95,10 +91,7 @@ def main() -> int:
                          ("gain", "gain", ".2f"), ("difference", "branches differ by", ".1e")]))
     print(f"(continuation in omega, CPU time of the process, min of {args.repeats} interleaved repeats; the "
           "difference: states, multipliers and field values, relative to the largest)")
-    result = {"benchmark": "ring_step_matrices", "repeats": args.repeats, "rows": rows,
-              "machine": C.machine(), "elapsed_s": time.time() - t0}
-    print(f"written {C.write_json('ring_step_matrices', result)}")
-    return 0 if all(r["difference"] <= 1e-7 for r in rows) else 1
+    return C.finish("ring_step_matrices", rows, args.repeats, t0)
 
 
 if __name__ == "__main__":

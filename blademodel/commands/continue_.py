@@ -18,6 +18,7 @@ from ..orbits.branch_states import alike, envelope, state_indices
 from ..orbits.cyclic import CyclicError
 from ..orbits.least_period import branch_least_periods
 from ..progress import Progress
+from ..sweep.point import observed
 from . import jsonout
 from .common import (add_jacobian_arguments, add_model_arguments, add_stepping_arguments, check_at_least_one,
                      config_and_model)
@@ -169,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError("--overlay draws a sweep's first harmonics or its P_d: use it with --quantity harmonic "
                              "or reduction")
         sweep_overlay(args.overlay, args.param, 0, quantity=args.quantity)   # the file's checks, before the run
-    config, _ = config_and_model(args)
+    config, model = config_and_model(args)
     run_settings = {k: getattr(args, k) for k in _RUN_OPTIONS}
     if args.grazing_tol is not None:   # (files written without it stay this command's own at the default)
         if not args.grazing_tol > 0:
@@ -242,6 +243,7 @@ def run(args: argparse.Namespace) -> int:
     state = args.state or branch.state_names[0]
     idx = state_indices(branch.state_names, state, "--state")
     reduction, unreduced = _reduction(branch, config)
+    summed = ", ".join(observed(model))   # what P_d sums
     if args.plot:
         from ..plots.branch import branch_figure
         overlay = None
@@ -255,7 +257,7 @@ def run(args: argparse.Namespace) -> int:
             if reduction is None:
                 raise ValueError(f"--quantity reduction: {unreduced}")
             values = [reduction] + [_reduction(b, config)[0] for b, _ in drawn[1:]]
-        branch_figure([b for b, _ in drawn], ", ".join(_observed(config)) if values is not None else state,
+        branch_figure([b for b, _ in drawn], summed if values is not None else state,
                       quantity=args.quantity, overlay=overlay, values=values,
                       labels=[label for _, label in drawn] if len(drawn) > 1 else None).savefig(args.plot, dpi=120)
     spread = envelope(branch.harmonics, idx)
@@ -283,7 +285,7 @@ def run(args: argparse.Namespace) -> int:
     print(_peak(branch, state, idx, spread, args.param))
     if reduction is not None and np.isfinite(reduction).any():
         k = int(np.nanargmax(reduction))
-        print(f"  vibration reduction P_d of {', '.join(_observed(config))}: {np.nanmin(reduction):.4g} % to "
+        print(f"  vibration reduction P_d of {summed}: {np.nanmin(reduction):.4g} % to "
               f"{reduction[k]:.4g} % (the largest at {args.param} = {branch.params[k]:.8g}, "
               f"{'stable' if branch.stable[k] else 'unstable'})")
     for p in branch.special:
@@ -308,11 +310,6 @@ def run(args: argparse.Namespace) -> int:
         if name:
             print(f"{what} {name}")
     return 0
-
-
-def _observed(config) -> list:
-    """The coordinates ``P_d`` sums: the first mass's (as sweeps observe)."""
-    return list(config.build().masses[0].coordinates)
 
 
 def _reduction(b, config) -> tuple:

@@ -10,6 +10,7 @@ import numpy as np
 from ..numeric import SimulationError
 from ..numeric.kernels import make_integrator
 from ..orbits import FlowError, ShootingError, find_periodic_orbit
+from ..sweep.point import observed
 from . import jsonout
 from .common import (add_jacobian_arguments, add_model_arguments, add_stepping_arguments, check_at_least_one,
                      config_and_model)
@@ -90,8 +91,7 @@ def run(args: argparse.Namespace) -> int:
           f"{len(orbit.history) - 1} Newton steps, scaled residual {orbit.residual:.2g}")
     print(f"state at t = 0 ({mode_name}): " + ", ".join(f"{k}={v:.6g}" for k, v in rep["state"].items()))
     print("amplitudes: " + ", ".join(f"{k}={v:.6g}" for k, v in rep["amplitudes"].items()))
-    names = ", ".join(model.masses[0].coordinates)
-    print(f"vibration reduction P_d of {names}: {rep['P_d']:.4g} %" if rep["P_d"] is not None else
+    print(f"vibration reduction P_d of {', '.join(observed(model))}: {rep['P_d']:.4g} %" if rep["P_d"] is not None else
           f"vibration reduction P_d: none ({why})")
     return 0
 
@@ -101,7 +101,7 @@ def _reduction(orbit, model) -> tuple:
     ``(None, why)`` (:func:`~blademodel.analysis.contact_free.contact_free_mean_squares`)."""
     from ..analysis.contact_free import contact_free_mean_squares
     from ..analysis.reduction import mean_square, vibration_reduction
-    names = list(model.masses[0].coordinates)
+    names = list(observed(model))
     try:
         ms0 = contact_free_mean_squares(model)
     except ValueError as e:

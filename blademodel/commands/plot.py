@@ -76,9 +76,10 @@ def _branch_reduction(data: dict | None, branch, path: Path) -> tuple | None:
     from ..orbits.branch_reduction import branch_vibration_reduction
     if data is None or not np.isfinite(branch.mean_squares).any():
         return None
+    from ..sweep.point import observed
     config = config_from_data(data, source=str(path))
     try:
         values = branch_vibration_reduction(branch, config)
     except ValueError:
         return None
-    return ", ".join(config.build().masses[0].coordinates), values
+    return ", ".join(observed(config.build())), values

@@ -127,7 +127,8 @@ def stability_matrix(hA: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
 
 def sparse_stability_matrix(hA, coefficients: np.ndarray):
     """:func:`stability_matrix` of a sparse ``hA`` by Horner's rule in sparse products, sparse (CSR) unless it is
-    denser than :data:`SPARSE_STEPS_DENSITY` (then dense)."""
+    denser than :data:`SPARSE_STEPS_DENSITY` (then dense). The replay assembles ``R(hA)`` from kept powers instead
+    (:func:`sparse_stability_matrix_from_powers`); this is what they are checked and measured against."""
     from scipy.sparse import csr_matrix, identity
     hA = csr_matrix(hA)
     eye = identity(hA.shape[0], format="csr")
@@ -424,12 +425,11 @@ class ContactTangent:
             if P is None:
                 P = sparse_amplification_powers(self.flow_matrix(cm, y), self._poly.size - 1)
                 if P[0].shape[1] > SPARSE_STEPS_DENSITY * self.n * self.n:
-                    P = ()   # the polynomial fills in: not kept, R(hA) made dense
+                    P = ()   # the polynomial fills in: not kept, R(hA) dense by Horner's rule
                 self._sparse_powers[key] = P
-            if not P:
-                return sparse_stability_matrix(h * self.flow_matrix(cm, y), self._poly)
-            return sparse_stability_matrix_from_powers(P, h, self._poly)
-        if not self._whole_by_powers:
+            if P:
+                return sparse_stability_matrix_from_powers(P, h, self._poly)
+        if not self._whole_by_powers:   # (dense, by Horner's rule: also a sparse A whose step fills in)
             return stability_matrix(h * self.flow_matrix(cm, y), self._poly)
         key = self._key(cm, y)
         P = self._powers_of_A.get(key)

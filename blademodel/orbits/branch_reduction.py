@@ -34,11 +34,12 @@ def branch_vibration_reduction(branch, config, names=None) -> np.ndarray:
     from ..analysis.contact_free import contact_free_mean_squares
     from ..analysis.reduction import vibration_reduction
     from ..config import apply_overrides
+    from ..sweep.point import observed
     out = np.full(branch.params.size, np.nan)
     if branch.mean_squares.shape != branch.states.shape:
         return out
     first = apply_overrides(config, {branch.field: float(branch.params[0])}, source="P_d").build()
-    names = list(names) if names else list(first.masses[0].coordinates)
+    names = list(names) if names else list(observed(first))
     unknown = [n for n in names if n not in branch.state_names]
     if unknown:
         raise ValueError(f"P_d: {', '.join(map(repr, unknown))} is not a state of the branch "

@@ -118,10 +118,8 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
             "reduction": "vibration reduction P_d"}[quantity]
     first = branches[0]
     ax.set_xlabel(first.field)
-    if quantity == "reduction":
-        ax.set_ylabel(f"vibration reduction P_d of {state}, %")
-    else:
-        ax.set_ylabel(f"{what} of {state}" if not several else f"{what}, largest of {state}")
+    unit = ", %" if quantity == "reduction" else ""
+    ax.set_ylabel(f"{what} of {state}{unit}" if not several else f"{what}, largest of {state}")
     periods = sorted({b.periods for b in branches})
     unfinished = " (unfinished: " + first.message + ")" if not first.complete else ""
     ax.set_title(f"period-{'/'.join(str(p) for p in periods)} orbits continued in {first.field}{unfinished}")
