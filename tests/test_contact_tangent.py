@@ -229,6 +229,51 @@ def test_a_closed_ring_that_sticks_is_differentiated_through_its_singular_stick_
     assert scaled_error(s.monodromy, ref, orbit.scale) < 1e-6
 
 
+@pytest.mark.parametrize("case", ["mistuned", "closed", "bilinear"])
+def test_the_compiled_cluster_step_is_the_python_one(monkeypatch, case):
+    """The replay stepping each cluster through its events in compiled code (``cluster_step``) gives the
+    monodromy that the Python steps give, to rounding: on six mistuned blades (several clusters in a step),
+    on the closed ring that sticks (the joint projection through its singular stick problem) and on the
+    bilinear ring, whose openings and closings reset the law's state (those steps stay in Python: the
+    compiled one takes only the steps without a reset)."""
+    from blademodel.numeric import contact_tangent
+    if case == "mistuned":
+        ig, orbit = ring_orbit("coulomb", blades=6, engine_order=2, mistuning_std=0.05, mistuning_seed=1, F0=120.0)
+    elif case == "closed":
+        ig, orbit = ring_orbit("coulomb", engine_order=0, gap=-4e-5, mu=0.3, F0=60.0, mistuning_std=0.2,
+                               mistuning_seed=2)
+    else:
+        ig, orbit = ring_orbit("bilinear")
+    calls = {"compiled": 0, "python": 0}
+    compiled, python = (contact_tangent.ContactTangent._compiled_cluster_step,
+                        contact_tangent.ContactTangent._cluster_step)
+
+    def counted(name, f):
+        def g(*a, **k):
+            calls[name] += 1
+            return f(*a, **k)
+        return g
+
+    monkeypatch.setattr(contact_tangent.ContactTangent, "_compiled_cluster_step", counted("compiled", compiled))
+    monkeypatch.setattr(contact_tangent.ContactTangent, "_cluster_step", counted("python", python))
+
+    def monodromy(compiled_steps):
+        monkeypatch.setattr(contact_tangent, "COMPILED_CLUSTER_STEPS", compiled_steps)
+        contact_tangent._CACHES.clear()
+        return PeriodMap(ig, 1, jacobian="tangent", workers=1).derivatives(orbit.state, orbit.mode.copy()).monodromy
+
+    fast = monodromy(True)
+    taken = dict(calls)
+    calls.update(compiled=0, python=0)
+    reference = monodromy(False)
+    assert calls["compiled"] == 0 and calls["python"] == taken["compiled"] + taken["python"] >= 20
+    if case == "bilinear":   # every event of this orbit opens or closes a contact, or moves a law state
+        assert taken["python"] > 0
+    else:
+        assert taken["python"] == 0
+    assert scaled_error(fast, reference, orbit.scale) < 1e-12
+
+
 def test_auto_takes_the_tangent_on_a_ring():
     """``jacobian="auto"`` on the per-contact kernel replays the residual's own run: one integration, not the
     ``2 n`` of central differences, and the matrix is the tangent's."""

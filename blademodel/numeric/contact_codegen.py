@@ -29,7 +29,7 @@ TEMPLATES = (bracket, contact_flow, contact_stick, contact_guards, contact_locat
 #: The others are not cached on their own: a function loaded from the cache is a
 #: separate library that callers cannot inline, and each call to one cost ~0.4 us.
 _ENTRY_POINTS = ("integrate", "initial_modes", "settle_start", "rhs", "factor_stick", "forces", "law_energy",
-                 "guards_at", "transition_at", "substep_derivatives", "guard_derivatives")
+                 "guards_at", "transition_at", "substep_derivatives", "guard_derivatives", "cluster_step")
 
 #: Entry points that release the GIL while they run: a period map's difference quotients run
 #: in threads (:meth:`~blademodel.orbits.period_map.PeriodMap.differences`), each with its own
@@ -39,7 +39,7 @@ _NOGIL = ("integrate",)
 #: Entry points never called from compiled code: what they link becomes internal to them
 #: (:class:`~blademodel.numeric.code_libraries.EntryPointCompiler`).
 _TOP_LEVEL = ("integrate", "initial_modes", "settle_start", "rhs", "forces", "law_energy", "guards_at",
-              "transition_at", "substep_derivatives", "guard_derivatives")
+              "transition_at", "substep_derivatives", "guard_derivatives", "cluster_step")
 
 #: Helpers that return views of the flat buffers: inlined (a function compiled without
 #: reference counting may only return an array it was given).

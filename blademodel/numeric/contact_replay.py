@@ -35,6 +35,11 @@ def substep_derivatives(t, y, h, cm, d, Ar, rows, ta, tb, tc, I, R, WI, WF, K, K
     ``Kh, Kt, BT`` (stages by cluster rows), ``Y``, ``F`` (a full state each), ``Z``
     (a full zero state, left zero). The stick problem of ``cm`` must be factored.
     """
+    replay_substep(t, y, h, cm, d, Ar, rows, ta, tb, tc, I, R, WI, WF, K, Kh, Kt, BT, Y, Z, F, end, Pt, Ph)
+
+
+def replay_substep(t, y, h, cm, d, Ar, rows, ta, tb, tc, I, R, WI, WF, K, Kh, Kt, BT, Y, Z, F, end, Pt, Ph):
+    """:func:`substep_derivatives`, linked into the compiled functions that call it."""
     s = tb.shape[0]
     ns = y.shape[0]
     nr = rows.shape[0]
@@ -105,6 +110,11 @@ def guard_derivatives(t, y, cm, j, gi, rows, steps, d, gyr, I, R, WI, WF, G, Y, 
     along the probe ``steps`` (on ``rows``) to ``1e-7``, else 0 with the gradient on ``rows`` in ``out``, central
     differences at ``y`` with those steps (``Y``: a full state, work). The stick problem of ``cm`` must be
     factored."""
+    return replay_guard(t, y, cm, j, gi, rows, steps, d, gyr, I, R, WI, WF, G, Y, out)
+
+
+def replay_guard(t, y, cm, j, gi, rows, steps, d, gyr, I, R, WI, WF, G, Y, out):
+    """:func:`guard_derivatives`, linked into the compiled functions that call it."""
     eval_guards(t + d, y, cm, I, R, WI, WF, G)  # noqa: F821
     gp = G[j, gi]
     eval_guards(t - d, y, cm, I, R, WI, WF, G)  # noqa: F821
@@ -136,3 +146,120 @@ def guard_derivatives(t, y, cm, j, gi, rows, steps, d, gyr, I, R, WI, WF, G, Y, 
         out[r] = (gp - G[j, gi]) / (2.0 * e)
         Y[i] = y[i]
     return gt, 0
+
+
+def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff, gmc, gmto, P, proj, PB, gyr, poly,
+                 ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta, dtb, Rb, steps, cols, info):
+    """One step's tangent on a cluster's rows through its transition groups, into ``out``; 0, or 1 where a guard
+    that fired has no rate (its time in ``info[0]``).
+
+    The compiled form of ``ContactTangent._cluster_step`` for transitions that reset no
+    law state and laws without labels. ``X0``: the tangent's block on ``rows`` at the
+    step's start (overwritten; ``X1`` the same shape, work). The step from ``t0`` to
+    ``t1`` (``H`` the whole step's length) starts at ``y0`` in the modes ``cm`` (changed
+    to the step's end modes). Group ``g < ng`` of transitions, all at ``gtime[g]``: the
+    guard ``gfg[g]`` of contact ``gfc[g]`` fired it (``-1``: none, a mode the friction
+    problem set), its transitions set contact ``gmc[q]`` to mode ``gmto[q]`` for ``q``
+    in ``goff[g] .. goff[g + 1]``, and where ``proj[g]`` a rigid contact starts to stick
+    and the block is projected by ``PB[g]``. ``gyr[g]``: the fired guard's kept gradient
+    on ``rows``. ``P[g]``: the powers of ``A``'s block on ``rows`` in the modes of the
+    sub-step before group ``g`` (``P[ng]``: after the last), ``A`` itself first;
+    ``poly``: the method's stability polynomial, lowest power first. The rest are work
+    arrays: the sub-step's (:func:`substep_derivatives`), ``ya`` (a full state), ``dta,
+    dtb`` (a row of the block each), ``Rb`` (a block of ``A``'s), ``steps, cols`` (a
+    row's length each).
+    """
+    nr = rows.shape[0]
+    m = X0.shape[1]
+    ns = y0.shape[0]
+    deg = P.shape[1]
+    d = 1e-6 * H
+    for k in range(ns):
+        ya[k] = y0[k]
+    for c in range(m):
+        dta[c] = 0.0
+    start = t0
+    cur = 0   # the block is in X0 (0) or X1 (1)
+    for g in range(ng + 1):
+        te = gtime[g] if g < ng else t1
+        h = te - start
+        factor_stick(cm, I, R, WI, WF)  # noqa: F821
+        replay_substep(start, ya, h, cm, d, P[g, 0], rows, ta, tb, tc, I, R, WI, WF, K, Kh, Kt, BT, Y, Z, F, end,
+                       Pt, Ph)
+        # R(h A) on the block: the stability polynomial in the kept powers of A
+        for r in range(nr):
+            for c in range(nr):
+                Rb[r, c] = 0.0
+        for k in range(deg):
+            ck = poly[k + 1] * h ** (k + 1)
+            for r in range(nr):
+                for c in range(nr):
+                    Rb[r, c] += ck * P[g, k, r, c]
+        for r in range(nr):
+            Rb[r, r] += poly[0]
+        src = X0 if cur == 0 else X1
+        dst = out if g == ng else (X1 if cur == 0 else X0)
+        for r in range(nr):
+            w = Pt[r] - Ph[r]
+            for c in range(m):
+                dst[r, c] = w * dta[c]
+            for q in range(nr):
+                a = Rb[r, q]
+                if a != 0.0:
+                    for c in range(m):
+                        dst[r, c] += a * src[q, c]
+        if g == ng:
+            return 0
+        j = gfc[g]
+        if j >= 0:
+            big = 0.0
+            for r in range(nr):
+                big = max(big, abs(end[rows[r]]))
+            for r in range(nr):
+                steps[r] = 1e-6 * max(abs(end[rows[r]]), 1e-3 * big)
+            gt, kept = replay_guard(te, end, cm, j, gfg[g], rows, steps, d, gyr[g], I, R, WI, WF, G, Y, cols)
+            if kept == 1:
+                for r in range(nr):
+                    cols[r] = gyr[g, r]
+            rate = gt
+            for r in range(nr):
+                rate += cols[r] * Ph[r]
+            if rate == 0.0 or not math.isfinite(rate):
+                info[0] = te
+                return 1
+            for c in range(m):
+                dtb[c] = 0.0
+            for r in range(nr):
+                a = cols[r]
+                if a != 0.0:
+                    for c in range(m):
+                        dtb[c] += a * dst[r, c]
+            for c in range(m):
+                dtb[c] = -dtb[c] / rate
+        else:
+            for c in range(m):
+                dtb[c] = 0.0
+        for r in range(nr):
+            a = Ph[r]
+            for c in range(m):
+                dst[r, c] += a * dtb[c]
+        for q in range(goff[g], goff[g + 1]):
+            cm[gmc[q]] = gmto[q]
+        cur = 1 - cur   # the block is in dst now
+        if proj[g] != 0:
+            other = src   # free: the block is in dst
+            for r in range(nr):
+                for c in range(m):
+                    other[r, c] = 0.0
+                for q in range(nr):
+                    a = PB[g, r, q]
+                    if a != 0.0:
+                        for c in range(m):
+                            other[r, c] += a * dst[q, c]
+            cur = 1 - cur
+        start = te
+        for k in range(ns):
+            ya[k] = end[k]
+        for c in range(m):
+            dta[c] = dtb[c]
+    return 0

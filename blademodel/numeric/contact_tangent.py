@@ -89,6 +89,11 @@ SPARSE_STEPS_DENSITY = 0.25
 #: the dense power (squarings), which costs a product for each bit of the run's length.
 SPARSE_RUN_MAX = 16
 
+#: Step a cluster through its events in compiled code (``cluster_step`` of :mod:`.contact_replay`) where its
+#: transitions reset no law state and the laws have no labels; else, and with False, in Python
+#: (:meth:`ContactTangent._cluster_step`, the reference the compiled step is tested against).
+COMPILED_CLUSTER_STEPS = True
+
 
 def _caches(integrator) -> dict:
     """The kept matrices of ``integrator``'s model and values (its ``flow_digest``)."""
@@ -97,7 +102,8 @@ def _caches(integrator) -> dict:
                                    "clusters": _Kept(KEEP_BYTES // 8),
                                    "checked": set(), "projections": _Kept(KEEP_BYTES // 8), "pattern": [],
                                    "ungrouped": set(), "resets": _Kept(KEEP_BYTES // 8),
-                                   "powers": _Kept(KEEP_BYTES // 4), "sparse_powers": _Kept(KEEP_BYTES // 4)}
+                                   "powers": _Kept(KEEP_BYTES // 4), "sparse_powers": _Kept(KEEP_BYTES // 4),
+                                   "plans": _Kept(KEEP_BYTES // 8)}
     _CACHES[key] = c
     while len(_CACHES) > _KEEP:
         _CACHES.popitem(last=False)
@@ -243,7 +249,9 @@ class ContactTangent:
         self._probe[self._labels] = 0.0   # a probe moves no label (a label a little off 0 reads as slip)
         self._factored = None   # the contact modes the stick problem in the work arrays is factored for
         self._cluster_sets, self._projections = caches["clusters"], caches["projections"]
-        self._resets = caches["resets"]   # labelled laws' reset Jacobians, by contact, guard, mode and labels
+        self._resets = caches["resets"]
+        self._plans = caches["plans"]   # the compiled cluster steps' (:meth:`_cluster_plan`)
+        self._cluster_work: dict = {}   # their work arrays, by the cluster's rows and the tangent's columns   # labelled laws' reset Jacobians, by contact, guard, mode and labels
         # the modes' powers of A and of its blocks (the blocks themselves the first), from which R(hA) is assembled
         # at any step
         self._powers_of_A = caches["powers"]
@@ -256,6 +264,7 @@ class ContactTangent:
         self._G = np.zeros_like(integrator.GS[0])
         self._rows = [self._contact_rows(j) for j in range(self.nc)]
         self._contact_labels = [np.intersect1d(self._law_rows(j), self._labels) for j in range(self.nc)]
+        self._stateless = [int(self.mod.NSTATES[int(K)]) == 0 for K in self.tables.claw]   # by contact: no reset
         # with labels, the replay carries the continuous states only: no matrix couples them to a label (its rows
         # and columns are zero), and the labels' block is held (a third of an Iwan ring's states, so the products
         # cost (2/3)^3 of the whole)
@@ -820,7 +829,7 @@ class ContactTangent:
             Vn = kept(self._step_matrix(H, cm0, rec_y[k])) @ V
             for rows, contacts in self._clusters(modes, seeds, rec_y[k]):
                 events = [i for i in order if int(lc[i]) in contacts]
-                Vn[loc[rows]] = self._cluster_step(V[loc[rows]], rows, contacts, events, log, t0, t1, rec_y[k], cm0,
+                Vn[loc[rows]] = self._step_cluster(V[loc[rows]], rows, contacts, events, log, t0, t1, rec_y[k], cm0,
                                                    H, rec_y[k + 1])
             V = Vn
             k += 1
@@ -875,6 +884,90 @@ class ContactTangent:
             stick = [j for j in contacts if self._rigid_stick(j, cm2[j])]
             V = self._projection_block(stick, rows) @ V
         return V, y, cm2
+
+    def _step_cluster(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1):
+        """:meth:`_cluster_step`, compiled (:meth:`_compiled_cluster_step`) where no transition of ``events`` resets a
+        law state and the laws have no labels."""
+        if COMPILED_CLUSTER_STEPS and not self._labels.size and \
+                all(self._stateless[int(log[1][i])] or log[2][i] < 0 for i in events):
+            return self._compiled_cluster_step(Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H)
+        return self._cluster_step(Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1)
+
+    def _compiled_cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H):
+        """:meth:`_cluster_step` by the compiled ``cluster_step``, from the step's plan (:meth:`_cluster_plan`)."""
+        lt, lc, lg, lf, lto = log
+        ev = np.asarray(events, dtype=np.int64)
+        key = (rows.tobytes(), cm0.tobytes(), lc[ev].tobytes(), lg[ev].tobytes(), lto[ev].tobytes(),
+               np.diff(lt[ev]).astype(bool).tobytes())
+        plan = self._plans.get(key)
+        if plan is None:
+            plan = self._plans[key] = self._cluster_plan(rows, in_cluster, events, log, cm0, y0)
+        gtime, first = lt[ev][plan[0]], plan[1:]
+        nr, m = rows.size, Vc.shape[1]
+        work = self._cluster_work.get((nr, m))
+        if work is None:
+            work = self._cluster_work[(nr, m)] = (
+                np.empty((nr, m)), np.empty((nr, m)), np.empty(self.ig.n_state), np.empty(self.ig.n_state),
+                np.empty(nr), np.empty(nr), np.empty(m), np.empty(m), np.empty((nr, nr)), np.empty(nr), np.empty(nr),
+                np.zeros(1))
+        X1, out, end, ya, Pt, Ph, dta, dtb, Rb, steps, cols, info = work
+        ig = self.ig
+        status = self.mod.cluster_step(np.array(Vc, dtype=float, order="C"), X1, out, rows, float(t0), float(t1),
+                                       y0, cm0.copy(), float(H), gtime.size, gtime, *first, self._poly,
+                                       *self._tableau, ig.I, ig.R, ig.WI, ig.WF, self._G, *self._work, end, ya, Pt, Ph,
+                                       dta, dtb, Rb, steps, cols, info)
+        self._factored = None   # the compiled step factored other modes in the work arrays
+        if status:
+            raise ContactTangentError(f"a grazing event at t = {info[0]:.9g} (its guard has no rate)")
+        return out.copy()
+
+    def _cluster_plan(self, rows, in_cluster, events, log, cm0, y0) -> tuple:
+        """What the compiled ``cluster_step`` takes of a step's cluster besides its times and states: where each
+        transition group starts among ``events`` (by time) and, as that function names them, ``gfc, gfg, goff,
+        gmc, gmto, P, proj, PB, gyr``: the groups' fired guards and transitions, each sub-step's powers of ``A``'s
+        block, the stick projections and the fired guards' kept gradients. It depends on the modes, the rows
+        and the transitions only, so it is kept with the model's matrices."""
+        lt, lc, lg, lf, lto = log
+        groups, starts = [], []   # [(contact, guard, to), ...] by time, and each one's first event
+        for q, i in enumerate(events):
+            if not groups or lt[i] != lt[events[starts[-1]]]:
+                groups.append([])
+                starts.append(q)
+            groups[-1].append((int(lc[i]), int(lg[i]), int(lto[i])))
+        ng, nr = len(groups), rows.size
+        degree = self._poly.size - 1
+        P = np.empty((ng + 1, degree, nr, nr))
+        gyr = np.zeros((ng, nr))
+        gfc = np.full(ng, -1, dtype=np.int64)
+        gfg = np.zeros(ng, dtype=np.int64)
+        goff = np.zeros(ng + 1, dtype=np.int64)
+        gmc, gmto = [], []
+        proj = np.zeros(ng, dtype=np.int64)
+        PB = np.zeros((ng, nr, nr))
+        cm = cm0.copy()
+        for g, group in enumerate(groups):
+            P[g] = self._block_powers(cm, y0, rows).reshape(degree, nr, nr)
+            fired = next(((j, gi) for j, gi, _ in group if gi >= 0), None)
+            if fired is not None:
+                gfc[g], gfg[g] = fired
+                key = (cm.tobytes(), *fired)
+                gy = self._gy.get(key)
+                if gy is None:
+                    self._gy[key] = gy = self._guard_gradient_at_zero(cm, *fired)
+                gyr[g] = gy[rows]
+            after = cm.copy()
+            for j, _, to in group:
+                after[j] = to
+                gmc.append(j)
+                gmto.append(to)
+            goff[g + 1] = len(gmc)
+            if any(self._rigid_stick(j, after[j]) and not self._rigid_stick(j, cm[j]) for j in in_cluster):
+                proj[g] = 1
+                PB[g] = self._projection_block([j for j in in_cluster if self._rigid_stick(j, after[j])], rows)
+            cm = after
+        P[ng] = self._block_powers(cm, y0, rows).reshape(degree, nr, nr)
+        return (np.array(starts, dtype=np.int64), gfc, gfg, goff, np.array(gmc, dtype=np.int64),
+                np.array(gmto, dtype=np.int64), P, proj, PB, gyr)
 
     def _cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1=None):
         """The rows ``rows`` of a step's tangent through the cluster's ``events`` (log indices, in time order);
