@@ -68,6 +68,16 @@ def ring_continuation(overrides: dict, opts: dict):
     return continuation(cfg, "omega", o.pop("start"), o.pop("stop"), **o)
 
 
+def same(a, b) -> float:
+    """The largest difference of two branches' field values and leading multipliers' moduli, relative to the
+    largest (inf where their points differ in number)."""
+    if a.params.size != b.params.size:
+        return np.inf
+    ma, mb = np.abs(a.multipliers[:, 0]), np.abs(b.multipliers[:, 0])
+    return max(float(np.max(np.abs(a.params - b.params)) / np.max(np.abs(a.params))),
+               float(np.max(np.abs(ma - mb)) / np.max(ma)))
+
+
 def finish(name: str, rows: list, repeats: int, t0: float, agree: float = 1e-7) -> int:
     """Write the ``rows`` of benchmark ``name`` (with the repeats, the machine and the time since ``t0``) to
     ``docs/benchmarks/<name>.json``; the exit code: 0 where every row's ``difference`` (of the two ways' branches)

@@ -63,16 +63,6 @@ def now(way: str) -> None:
     contact_tangent._CACHES.clear()
 
 
-def same(a, b) -> float:
-    """The largest difference of two branches' field values and leading multipliers' moduli, relative to the
-    largest (inf where their points differ in number)."""
-    if a.params.size != b.params.size:
-        return np.inf
-    ma, mb = np.abs(a.multipliers[:, 0]), np.abs(b.multipliers[:, 0])
-    return max(float(np.max(np.abs(a.params - b.params)) / np.max(np.abs(a.params))),
-               float(np.max(np.abs(ma - mb)) / np.max(ma)))
-
-
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--repeats", type=int, default=2)
@@ -96,7 +86,7 @@ def main() -> int:
         rows.append({"case": name, "states": int(b.states.shape[1]), "points": int(b.params.size),
                      "replays": int(b.replays), "before_s": t["dense"], "horner_s": t["horner"], "now_s": t["powers"],
                      "gain_horner": t["dense"] / t["horner"], "gain": t["dense"] / t["powers"],
-                     "difference": max(same(b, branches["dense"]), same(b, branches["horner"]))})
+                     "difference": max(C.same(b, branches["dense"]), C.same(b, branches["horner"]))})
         print(f"  {name}: {rows[-1]['gain']:.2f} x", flush=True)
     print(C.table(rows, [("case", "ring", "s"), ("states", "states", "d"), ("points", "points", "d"),
                          ("replays", "replays", "d"), ("before_s", "dense s", ".1f"),

@@ -148,26 +148,31 @@ def replay_guard(t, y, cm, j, gi, rows, steps, d, gyr, I, R, WI, WF, G, Y, out):
     return gt, 0
 
 
-def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff, gmc, gmto, P, proj, PB, gyr, poly,
-                 ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta, dtb, Rb, steps, cols, info):
+def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, P, proj, PB,
+                 gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta, dtb, Rb,
+                 steps, cols, Y2, D, RW, info):
     """One step's tangent on a cluster's rows through its transition groups, into ``out``; 0, or 1 where a guard
     that fired has no rate (its time in ``info[0]``).
 
-    The compiled form of ``ContactTangent._cluster_step`` for transitions that reset no
-    law state and laws without labels. ``X0``: the tangent's block on ``rows`` at the
+    The compiled form of ``ContactTangent._cluster_step`` for laws without labels. ``X0``:
+    the tangent's block on ``rows`` at the
     step's start (overwritten; ``X1`` the same shape, work). The step from ``t0`` to
     ``t1`` (``H`` the whole step's length) starts at ``y0`` in the modes ``cm`` (changed
     to the step's end modes). Group ``g < ng`` of transitions, all at ``gtime[g]``: the
     guard ``gfg[g]`` of contact ``gfc[g]`` fired it (``-1``: none, a mode the friction
     problem set), its transitions set contact ``gmc[q]`` to mode ``gmto[q]`` for ``q``
-    in ``goff[g] .. goff[g + 1]``, and where ``proj[g]`` a rigid contact starts to stick
+    in ``goff[g] .. goff[g + 1]``, fired by its guard ``gmg[q]`` and resetting the ``mn[q]``
+    law states from row ``mlo[q]`` (none where ``mn[q]`` is 0): their rows of the block are the reset's central differences
+    in ``rows`` at the event (as ``ContactTangent._reset_jacobian``'s, ``nphys`` the physical
+    states), and where ``proj[g]`` a rigid contact starts to stick
     and the block is projected by ``PB[g]``. ``gyr[g]``: the fired guard's kept gradient
     on ``rows``. ``P[g]``: the powers of ``A``'s block on ``rows`` in the modes of the
     sub-step before group ``g`` (``P[ng]``: after the last), ``A`` itself first;
     ``poly``: the method's stability polynomial, lowest power first. The rest are work
     arrays: the sub-step's (:func:`substep_derivatives`), ``ya`` (a full state), ``dta,
     dtb`` (a row of the block each), ``Rb`` (a block of ``A``'s), ``steps, cols`` (a
-    row's length each).
+    row's length each), ``Y2`` (a full state), ``D`` and ``RW`` (the most law states by a
+    row's length and by a row of the block).
     """
     nr = rows.shape[0]
     m = X0.shape[1]
@@ -244,6 +249,9 @@ def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff
             for c in range(m):
                 dst[r, c] += a * dtb[c]
         for q in range(goff[g], goff[g + 1]):
+            if mn[q] > 0:
+                reset_rows(te, end, cm, gmc[q], gmg[q], mlo[q], mn[q], rows, nphys, dst, I, R, WI,
+                           WF, G, Y2, D, RW)
             cm[gmc[q]] = gmto[q]
         cur = 1 - cur   # the block is in dst now
         if proj[g] != 0:
@@ -263,3 +271,43 @@ def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff
         for c in range(m):
             dta[c] = dtb[c]
     return 0
+
+
+def reset_rows(t, y, cm, j, gi, lo, nst, rows, nphys, V, I, R, WI, WF, G, Y2, D, RW):
+    """Contact ``j``'s reset by guard ``gi`` at ``(t, y)`` in ``cm`` applied to the block ``V`` on ``rows`` (its
+    law states' rows ``lo .. lo + nst`` become the reset's central differences in ``rows``) and to ``y``."""
+    nr = rows.shape[0]
+    m = V.shape[1]
+    ns = y.shape[0]
+    big = 0.0
+    for i in range(nphys):
+        big = max(big, abs(y[i]))
+    big = 1e-3 * max(big, 1e-300)
+    for rc in range(nr):
+        c = rows[rc]
+        e = 1e-6 * max(abs(y[c]), big)
+        for k in range(ns):
+            Y2[k] = y[k]
+        Y2[c] = y[c] + e
+        apply_transition(t, Y2, cm, j, gi, I, R, WI, WF, G)  # noqa: F821
+        for s in range(nst):
+            D[s, rc] = Y2[lo + s]
+        for k in range(ns):
+            Y2[k] = y[k]
+        Y2[c] = y[c] - e
+        apply_transition(t, Y2, cm, j, gi, I, R, WI, WF, G)  # noqa: F821
+        for s in range(nst):
+            D[s, rc] = (D[s, rc] - Y2[lo + s]) / (2.0 * e)
+    for s in range(nst):
+        for c in range(m):
+            RW[s, c] = 0.0
+        for rc in range(nr):
+            a = D[s, rc]
+            if a != 0.0:
+                for c in range(m):
+                    RW[s, c] += a * V[rc, c]
+    for r in range(nr):
+        if lo <= rows[r] < lo + nst:
+            for c in range(m):
+                V[r, c] = RW[rows[r] - lo, c]
+    apply_transition(t, y, cm, j, gi, I, R, WI, WF, G)  # noqa: F821

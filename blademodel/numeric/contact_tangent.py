@@ -265,6 +265,7 @@ class ContactTangent:
         self._rows = [self._contact_rows(j) for j in range(self.nc)]
         self._contact_labels = [np.intersect1d(self._law_rows(j), self._labels) for j in range(self.nc)]
         self._stateless = [int(self.mod.NSTATES[int(K)]) == 0 for K in self.tables.claw]   # by contact: no reset
+        self._most_states = max([int(x) for x in self.mod.NSTATES] + [1])
         # with labels, the replay carries the continuous states only: no matrix couples them to a label (its rows
         # and columns are zero), and the labels' block is held (a third of an Iwan ring's states, so the products
         # cost (2/3)^3 of the whole)
@@ -886,10 +887,8 @@ class ContactTangent:
         return V, y, cm2
 
     def _step_cluster(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1):
-        """:meth:`_cluster_step`, compiled (:meth:`_compiled_cluster_step`) where no transition of ``events`` resets a
-        law state and the laws have no labels."""
-        if COMPILED_CLUSTER_STEPS and not self._labels.size and \
-                all(self._stateless[int(log[1][i])] or log[2][i] < 0 for i in events):
+        """:meth:`_cluster_step`, compiled (:meth:`_compiled_cluster_step`) where the laws have no labels."""
+        if COMPILED_CLUSTER_STEPS and not self._labels.size:
             return self._compiled_cluster_step(Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H)
         return self._cluster_step(Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1)
 
@@ -909,13 +908,14 @@ class ContactTangent:
             work = self._cluster_work[(nr, m)] = (
                 np.empty((nr, m)), np.empty((nr, m)), np.empty(self.ig.n_state), np.empty(self.ig.n_state),
                 np.empty(nr), np.empty(nr), np.empty(m), np.empty(m), np.empty((nr, nr)), np.empty(nr), np.empty(nr),
+                np.empty(self.ig.n_state), np.empty((self._most_states, nr)), np.empty((self._most_states, m)),
                 np.zeros(1))
-        X1, out, end, ya, Pt, Ph, dta, dtb, Rb, steps, cols, info = work
+        X1, out, end, ya, Pt, Ph, dta, dtb, Rb, steps, cols, Y2, D, RW, info = work
         ig = self.ig
         status = self.mod.cluster_step(np.array(Vc, dtype=float, order="C"), X1, out, rows, float(t0), float(t1),
-                                       y0, cm0.copy(), float(H), gtime.size, gtime, *first, self._poly,
+                                       y0, cm0.copy(), float(H), gtime.size, gtime, *first, self._poly, self.n,
                                        *self._tableau, ig.I, ig.R, ig.WI, ig.WF, self._G, *self._work, end, ya, Pt, Ph,
-                                       dta, dtb, Rb, steps, cols, info)
+                                       dta, dtb, Rb, steps, cols, Y2, D, RW, info)
         self._factored = None   # the compiled step factored other modes in the work arrays
         if status:
             raise ContactTangentError(f"a grazing event at t = {info[0]:.9g} (its guard has no rate)")
@@ -924,9 +924,10 @@ class ContactTangent:
     def _cluster_plan(self, rows, in_cluster, events, log, cm0, y0) -> tuple:
         """What the compiled ``cluster_step`` takes of a step's cluster besides its times and states: where each
         transition group starts among ``events`` (by time) and, as that function names them, ``gfc, gfg, goff,
-        gmc, gmto, P, proj, PB, gyr``: the groups' fired guards and transitions, each sub-step's powers of ``A``'s
-        block, the stick projections and the fired guards' kept gradients. It depends on the modes, the rows
-        and the transitions only, so it is kept with the model's matrices."""
+        gmc, gmto, gmg, mlo, mn, P, proj, PB, gyr``: the groups' fired guards and transitions (each one's contact,
+        mode, guard and the law states it resets), each sub-step's powers of ``A``'s block, the stick projections
+        and the fired guards' kept gradients. It depends on the modes, the rows and the transitions only, so it is
+        kept with the model's matrices."""
         lt, lc, lg, lf, lto = log
         groups, starts = [], []   # [(contact, guard, to), ...] by time, and each one's first event
         for q, i in enumerate(events):
@@ -941,7 +942,7 @@ class ContactTangent:
         gfc = np.full(ng, -1, dtype=np.int64)
         gfg = np.zeros(ng, dtype=np.int64)
         goff = np.zeros(ng + 1, dtype=np.int64)
-        gmc, gmto = [], []
+        gmc, gmto, gmg, mlo, mn = [], [], [], [], []
         proj = np.zeros(ng, dtype=np.int64)
         PB = np.zeros((ng, nr, nr))
         cm = cm0.copy()
@@ -956,18 +957,23 @@ class ContactTangent:
                     self._gy[key] = gy = self._guard_gradient_at_zero(cm, *fired)
                 gyr[g] = gy[rows]
             after = cm.copy()
-            for j, _, to in group:
+            for j, gi, to in group:
                 after[j] = to
                 gmc.append(j)
                 gmto.append(to)
+                gmg.append(gi)
+                resets = gi >= 0 and not self._stateless[j]
+                own = self._law_rows(j)
+                mlo.append(int(own[0]) if resets else 0)
+                mn.append(own.size if resets else 0)
             goff[g + 1] = len(gmc)
             if any(self._rigid_stick(j, after[j]) and not self._rigid_stick(j, cm[j]) for j in in_cluster):
                 proj[g] = 1
                 PB[g] = self._projection_block([j for j in in_cluster if self._rigid_stick(j, after[j])], rows)
             cm = after
         P[ng] = self._block_powers(cm, y0, rows).reshape(degree, nr, nr)
-        return (np.array(starts, dtype=np.int64), gfc, gfg, goff, np.array(gmc, dtype=np.int64),
-                np.array(gmto, dtype=np.int64), P, proj, PB, gyr)
+        members = (np.array(x, dtype=np.int64) for x in (gmc, gmto, gmg, mlo, mn))
+        return (np.array(starts, dtype=np.int64), gfc, gfg, goff, *members, P, proj, PB, gyr)
 
     def _cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1=None):
         """The rows ``rows`` of a step's tangent through the cluster's ``events`` (log indices, in time order);
