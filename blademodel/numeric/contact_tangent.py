@@ -737,7 +737,11 @@ class ContactTangent:
             return found
         coupled = np.zeros((self.n, self.n), dtype=bool)
         for cm in modes:
-            coupled[self.flow_matrix(cm, y).nonzero()] = True
+            A = self.flow_matrix(cm, y)
+            if hasattr(A, "toarray"):
+                coupled[A.nonzero()] = True
+            else:
+                coupled |= A != 0.0
         coupled |= coupled.T
         for j in seeds:
             r = self._rows[j]
