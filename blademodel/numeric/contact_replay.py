@@ -26,6 +26,8 @@ affine only piecewise) it is central differences at the event's state
 
 import math  # noqa: F401
 
+from blademodel.numeric.contract import H_N, H_NC, NONNEG, W_NB, W_STAMP, WC_SEED
+
 
 def substep_derivatives(t, y, h, cm, d, Ar, rows, ta, tb, tc, I, R, WI, WF, K, Kh, Kt, BT, Y, Z, F, end, Pt, Ph):
     """The sub-step of length ``h`` from ``(t, y)`` in ``cm``: its end into ``end``, and on ``rows`` its end's
@@ -154,6 +156,10 @@ def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff
     """One step's tangent on a cluster's rows through its transition groups, into ``out``; 0, or 1 where a guard
     that fired has no rate (its time in ``info[0]``).
 
+    The sub-steps evaluate the kernel's cluster of these events only (its active set, as the
+    kernel stepped them), where that cluster holds ``rows`` (``info[1]`` 1), else the whole
+    model (``info[1]`` 0); the whole model is active again on return.
+
     The compiled form of ``ContactTangent._cluster_step`` for laws without labels. ``X0``:
     the tangent's block on ``rows`` at the
     step's start (overwritten; ``X1`` the same shape, work). The step from ``t0`` to
@@ -179,6 +185,43 @@ def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff
     ns = y0.shape[0]
     deg = P.shape[1]
     d = 1e-6 * H
+    info[1] = activate_cluster(rows, gmc, cm, I, WI, ns)
+    status = cluster_steps(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, P,
+                           proj, PB, gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya,
+                           Pt, Ph, dta, dtb, Rb, steps, cols, Y2, D, RW, info, nr, m, ns, deg, d)
+    set_full(WI)  # noqa: F821
+    return status
+
+
+def activate_cluster(rows, gmc, cm, I, WI, ns):
+    """Make the kernel's cluster of the contacts ``gmc`` (its seeds; ``cm`` the modes at the step's start) the
+    active set, as the kernel steps it: 1 if it holds every one of ``rows``, else the whole model active and 0."""
+    nc, n = I[H_NC], I[H_N]
+    seed = wvec(WI, nc, WC_SEED)  # noqa: F821
+    for j in range(nc):
+        seed[j] = 0
+    for q in range(gmc.shape[0]):
+        seed[gmc[q]] = 1
+    WI[W_NB] = 0
+    build_cluster(gmc[0], cm, I, WI, ns, WI[W_STAMP] + 1)  # noqa: F821
+    full, nsa = active_rows(WI, ns)  # noqa: F821
+    active = wrow(WI, nc, n, ns, 0)  # noqa: F821
+    for r in range(rows.shape[0]):
+        held = False
+        for ii in range(nsa):
+            if (active[ii] & NONNEG) == rows[r]:
+                held = True
+                break
+        if not held:
+            set_full(WI)  # noqa: F821
+            return 0
+    return 1
+
+
+def cluster_steps(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, P, proj, PB,
+                  gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta, dtb, Rb,
+                  steps, cols, Y2, D, RW, info, nr, m, ns, deg, d):
+    """:func:`cluster_step`'s sequence, on the active set it chose."""
     for k in range(ns):
         ya[k] = y0[k]
     for c in range(m):
@@ -250,7 +293,7 @@ def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff
                 dst[r, c] += a * dtb[c]
         for q in range(goff[g], goff[g + 1]):
             if mn[q] > 0:
-                reset_rows(te, end, cm, gmc[q], gmg[q], mlo[q], mn[q], rows, nphys, dst, I, R, WI,
+                reset_rows(te, end, y0, cm, gmc[q], gmg[q], mlo[q], mn[q], rows, nphys, dst, I, R, WI,
                            WF, G, Y2, D, RW)
             cm[gmc[q]] = gmto[q]
         cur = 1 - cur   # the block is in dst now
@@ -273,15 +316,18 @@ def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff
     return 0
 
 
-def reset_rows(t, y, cm, j, gi, lo, nst, rows, nphys, V, I, R, WI, WF, G, Y2, D, RW):
+def reset_rows(t, y, y0, cm, j, gi, lo, nst, rows, nphys, V, I, R, WI, WF, G, Y2, D, RW):
     """Contact ``j``'s reset by guard ``gi`` at ``(t, y)`` in ``cm`` applied to the block ``V`` on ``rows`` (its
-    law states' rows ``lo .. lo + nst`` become the reset's central differences in ``rows``) and to ``y``."""
+    law states' rows ``lo .. lo + nst`` become the reset's central differences in ``rows``) and to ``y``.
+
+    A difference's step is ``1e-6`` of its state, at least ``1e-9`` of the largest physical
+    state at the step's start ``y0`` (``y`` is valid on the active set only)."""
     nr = rows.shape[0]
     m = V.shape[1]
     ns = y.shape[0]
     big = 0.0
     for i in range(nphys):
-        big = max(big, abs(y[i]))
+        big = max(big, abs(y0[i]))
     big = 1e-3 * max(big, 1e-300)
     for rc in range(nr):
         c = rows[rc]

@@ -251,7 +251,9 @@ class ContactTangent:
         self._cluster_sets, self._projections = caches["clusters"], caches["projections"]
         self._resets = caches["resets"]
         self._plans = caches["plans"]   # the compiled cluster steps' (:meth:`_cluster_plan`)
-        self._cluster_work: dict = {}   # their work arrays, by the cluster's rows and the tangent's columns   # labelled laws' reset Jacobians, by contact, guard, mode and labels
+        self._cluster_work: dict = {}   # their work arrays, by the cluster's rows and the tangent's columns
+        #: compiled cluster steps taken on the whole model (0) and on the kernel's cluster alone (1)
+        self.cluster_steps = [0, 0]   # labelled laws' reset Jacobians, by contact, guard, mode and labels
         # the modes' powers of A and of its blocks (the blocks themselves the first), from which R(hA) is assembled
         # at any step
         self._powers_of_A = caches["powers"]
@@ -608,13 +610,15 @@ class ContactTangent:
                 return moved, after
         raise ContactTangentError(f"the transition of contact {j} at t = {t:.9g} sets other labels than the kernel did")
 
-    def _reset_jacobian(self, t, y, cm, j, gi, rows, target=None):
+    def _reset_jacobian(self, t, y, cm, j, gi, rows, target=None, y0=None):
         """``d y+ / d y`` of contact ``j``'s transition by guard ``gi`` at ``y`` and the state after it; ``None`` and
         ``y`` where the contact's law has no state to reset.
 
         A transition writes its contact's law states only: the Jacobian is the identity
         but for their rows, central differences of the transition in the cluster's
-        ``rows`` (what those states can depend on).
+        ``rows`` (what those states can depend on), each of step ``1e-6`` of its state and
+        at least ``1e-9`` of the largest physical state at the step's start ``y0`` (``y``
+        itself where None), as the compiled cluster step takes them.
 
         A law with labels (the Iwan elements' modes) decides them from the state, at the guard's root: the
         replay's state there and the kernel's differ by rounding, and a difference step moves the guard across
@@ -640,7 +644,8 @@ class ContactTangent:
         labels = self._contact_labels[j]
         cols = np.setdiff1d(np.union1d(rows, own), labels)
         free = np.setdiff1d(own, labels)
-        steps = 1e-6 * np.maximum(np.abs(y[cols]), 1e-3 * max(float(np.max(np.abs(y[:n]))), 1e-300))
+        y0 = y if y0 is None else y0
+        steps = 1e-6 * np.maximum(np.abs(y[cols]), 1e-3 * max(float(np.max(np.abs(y0[:n]))), 1e-300))
         Rj = np.eye(n)
         Rj[own] = 0.0
         if labels.size:
@@ -872,16 +877,17 @@ class ContactTangent:
                                             range(self.nc))
         return D
 
-    def _through_transitions(self, V, t, y, cm, group, rows, contacts, targets=None):
+    def _through_transitions(self, V, t, y, cm, group, rows, contacts, targets=None, y0=None):
         """``V`` (on ``rows``) taken through the transitions ``group`` at ``(t, y)`` from the modes ``cm``: each
         ``(contact, guard, to)``'s reset (``guard`` ``-1``: a mode the friction problem set, no reset), then the
         stick projection of ``contacts`` where one of them starts to stick. Returns ``(V, y, modes)`` after them.
-        ``targets``: by contact, its labels after its transitions as the kernel set them, where known."""
+        ``targets``: by contact, its labels after its transitions as the kernel set them, where known; ``y0``: the
+        step's start state (:meth:`_reset_jacobian`)."""
         cm2 = cm.copy()
         for j, gi, to in group:
             if gi >= 0:
                 target = None if targets is None else targets.get(j)
-                Rj, y = self._reset_jacobian(t, y, cm2, j, gi, rows, target)
+                Rj, y = self._reset_jacobian(t, y, cm2, j, gi, rows, target, y0)
                 if Rj is not None:
                     V = Rj[np.ix_(rows, rows)] @ V
             cm2[j] = to
@@ -913,7 +919,7 @@ class ContactTangent:
                 np.empty((nr, m)), np.empty((nr, m)), np.empty(self.ig.n_state), np.empty(self.ig.n_state),
                 np.empty(nr), np.empty(nr), np.empty(m), np.empty(m), np.empty((nr, nr)), np.empty(nr), np.empty(nr),
                 np.empty(self.ig.n_state), np.empty((self._most_states, nr)), np.empty((self._most_states, m)),
-                np.zeros(1))
+                np.zeros(2))
         X1, out, end, ya, Pt, Ph, dta, dtb, Rb, steps, cols, Y2, D, RW, info = work
         ig = self.ig
         status = self.mod.cluster_step(np.array(Vc, dtype=float, order="C"), X1, out, rows, float(t0), float(t1),
@@ -921,6 +927,7 @@ class ContactTangent:
                                        *self._tableau, ig.I, ig.R, ig.WI, ig.WF, self._G, *self._work, end, ya, Pt, Ph,
                                        dta, dtb, Rb, steps, cols, Y2, D, RW, info)
         self._factored = None   # the compiled step factored other modes in the work arrays
+        self.cluster_steps[int(info[1])] += 1
         if status:
             raise ContactTangentError(f"a grazing event at t = {info[0]:.9g} (its guard has no rate)")
         return out.copy()
@@ -1013,7 +1020,7 @@ class ContactTangent:
             targets = {j: y1[self._contact_labels[j]] for j, _, _ in group
                        if j in last and last[j] == te and self._contact_labels[j].size}
             Vc, ye, cm2 = self._through_transitions(W + np.outer(Ph, dtb), te, ye, cm, group, rows, in_cluster,
-                                                    targets)
+                                                    targets, y0)
             ta, ya, cm, dta = te, ye, cm2, dtb
         _, Pt, Ph = self._substep_derivatives(ta, ya, t1 - ta, cm, H, rows)
         return self._step_matrix(t1 - ta, cm, ya, rows) @ Vc + np.outer(Pt - Ph, dta)
