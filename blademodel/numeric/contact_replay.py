@@ -150,9 +150,9 @@ def replay_guard(t, y, cm, j, gi, rows, steps, d, gyr, I, R, WI, WF, G, Y, out):
     return gt, 0
 
 
-def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, P, proj, PB,
-                 gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta, dtb, Rb,
-                 steps, cols, Y2, D, RW, info):
+def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, Ab, proj,
+                 PB, gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta, dtb,
+                 Rb, Rb2, steps, cols, Y2, D, RW, info):
     """One step's tangent on a cluster's rows through its transition groups, into ``out``; 0, or 1 where a guard
     that fired has no rate (its time in ``info[0]``).
 
@@ -172,23 +172,23 @@ def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff
     in ``rows`` at the event (as ``ContactTangent._reset_jacobian``'s, ``nphys`` the physical
     states), and where ``proj[g]`` a rigid contact starts to stick
     and the block is projected by ``PB[g]``. ``gyr[g]``: the fired guard's kept gradient
-    on ``rows``. ``P[g]``: the powers of ``A``'s block on ``rows`` in the modes of the
-    sub-step before group ``g`` (``P[ng]``: after the last), ``A`` itself first;
-    ``poly``: the method's stability polynomial, lowest power first. The rest are work
+    on ``rows``. ``Ab[g]``: ``A``'s block on ``rows`` in the modes of the sub-step before
+    group ``g`` (``Ab[ng]``: after the last); ``poly``: the method's stability polynomial,
+    lowest power first (``R(hA)`` on the block by Horner's rule). The rest are work
     arrays: the sub-step's (:func:`substep_derivatives`), ``ya`` (a full state), ``dta,
-    dtb`` (a row of the block each), ``Rb`` (a block of ``A``'s), ``steps, cols`` (a
+    dtb`` (a row of the block each), ``Rb, Rb2`` (a block of ``A``'s each), ``steps, cols`` (a
     row's length each), ``Y2`` (a full state), ``D`` and ``RW`` (the most law states by a
     row's length and by a row of the block).
     """
     nr = rows.shape[0]
     m = X0.shape[1]
     ns = y0.shape[0]
-    deg = P.shape[1]
+    deg = poly.shape[0] - 1
     d = 1e-6 * H
     info[1] = activate_cluster(rows, gmc, cm, I, WI, ns)
-    status = cluster_steps(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, P,
+    status = cluster_steps(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, Ab,
                            proj, PB, gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya,
-                           Pt, Ph, dta, dtb, Rb, steps, cols, Y2, D, RW, info, nr, m, ns, deg, d)
+                           Pt, Ph, dta, dtb, Rb, Rb2, steps, cols, Y2, D, RW, info, nr, m, ns, deg, d)
     set_full(WI)  # noqa: F821
     return status
 
@@ -218,9 +218,9 @@ def activate_cluster(rows, gmc, cm, I, WI, ns):
     return 1
 
 
-def cluster_steps(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, P, proj, PB,
-                  gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta, dtb, Rb,
-                  steps, cols, Y2, D, RW, info, nr, m, ns, deg, d):
+def cluster_steps(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, Ab, proj,
+                  PB, gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta,
+                  dtb, Rb, Rb2, steps, cols, Y2, D, RW, info, nr, m, ns, deg, d):
     """:func:`cluster_step`'s sequence, on the active set it chose."""
     for k in range(ns):
         ya[k] = y0[k]
@@ -232,19 +232,26 @@ def cluster_steps(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff, 
         te = gtime[g] if g < ng else t1
         h = te - start
         factor_stick(cm, I, R, WI, WF)  # noqa: F821
-        replay_substep(start, ya, h, cm, d, P[g, 0], rows, ta, tb, tc, I, R, WI, WF, K, Kh, Kt, BT, Y, Z, F, end,
+        replay_substep(start, ya, h, cm, d, Ab[g], rows, ta, tb, tc, I, R, WI, WF, K, Kh, Kt, BT, Y, Z, F, end,
                        Pt, Ph)
-        # R(h A) on the block: the stability polynomial in the kept powers of A
+        # R(h A) on the block by Horner's rule: c_0 I + h A (c_1 I + h A (c_2 I + ...))
         for r in range(nr):
             for c in range(nr):
-                Rb[r, c] = 0.0
-        for k in range(deg):
-            ck = poly[k + 1] * h ** (k + 1)
+                Rb[r, c] = poly[deg] * h * Ab[g, r, c]
+            Rb[r, r] += poly[deg - 1]
+        for k in range(deg - 2, -1, -1):
             for r in range(nr):
                 for c in range(nr):
-                    Rb[r, c] += ck * P[g, k, r, c]
-        for r in range(nr):
-            Rb[r, r] += poly[0]
+                    Rb2[r, c] = 0.0
+                for q in range(nr):
+                    a = h * Ab[g, r, q]
+                    if a != 0.0:
+                        for c in range(nr):
+                            Rb2[r, c] += a * Rb[q, c]
+            for r in range(nr):
+                for c in range(nr):
+                    Rb[r, c] = Rb2[r, c]
+                Rb[r, r] += poly[k]
         src = X0 if cur == 0 else X1
         dst = out if g == ng else (X1 if cur == 0 else X0)
         for r in range(nr):

@@ -251,7 +251,7 @@ class ContactTangent:
         self._cluster_sets, self._projections = caches["clusters"], caches["projections"]
         self._resets = caches["resets"]
         self._plans = caches["plans"]   # the compiled cluster steps' (:meth:`_cluster_plan`)
-        self._cluster_work: dict = {}   # their work arrays, by the cluster's rows and the tangent's columns
+        self._cluster_work: dict = {}   # their work arrays, by the cluster's size
         #: compiled cluster steps taken on the whole model (0) and on the kernel's cluster alone (1)
         self.cluster_steps = [0, 0]   # labelled laws' reset Jacobians, by contact, guard, mode and labels
         # the modes' powers of A and of its blocks (the blocks themselves the first), from which R(hA) is assembled
@@ -903,7 +903,8 @@ class ContactTangent:
         return self._cluster_step(Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1)
 
     def _compiled_cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H):
-        """:meth:`_cluster_step` by the compiled ``cluster_step``, from the step's plan (:meth:`_cluster_plan`)."""
+        """:meth:`_cluster_step` by the compiled ``cluster_step``, from the step's plan (:meth:`_cluster_plan`): the
+        step's matrix on the cluster's rows (the sequence applied to the identity), then its product with ``Vc``."""
         lt, lc, lg, lf, lto = log
         ev = np.asarray(events, dtype=np.int64)
         key = (rows.tobytes(), cm0.tobytes(), lc[ev].tobytes(), lg[ev].tobytes(), lto[ev].tobytes(),
@@ -912,32 +913,35 @@ class ContactTangent:
         if plan is None:
             plan = self._plans[key] = self._cluster_plan(rows, in_cluster, events, log, cm0, y0)
         gtime, first = lt[ev][plan[0]], plan[1:]
-        nr, m = rows.size, Vc.shape[1]
-        work = self._cluster_work.get((nr, m))
+        nr = rows.size
+        work = self._cluster_work.get(nr)
         if work is None:
-            work = self._cluster_work[(nr, m)] = (
-                np.empty((nr, m)), np.empty((nr, m)), np.empty(self.ig.n_state), np.empty(self.ig.n_state),
-                np.empty(nr), np.empty(nr), np.empty(m), np.empty(m), np.empty((nr, nr)), np.empty(nr), np.empty(nr),
-                np.empty(self.ig.n_state), np.empty((self._most_states, nr)), np.empty((self._most_states, m)),
-                np.zeros(2))
-        X1, out, end, ya, Pt, Ph, dta, dtb, Rb, steps, cols, Y2, D, RW, info = work
+            n_state = self.ig.n_state
+            work = self._cluster_work[nr] = (
+                np.empty((nr, nr)), np.empty((nr, nr)), np.empty((nr, nr)), np.empty(n_state), np.empty(n_state),
+                np.empty(nr), np.empty(nr), np.empty(nr), np.empty(nr), np.empty((nr, nr)), np.empty((nr, nr)),
+                np.empty(nr), np.empty(nr), np.empty(n_state), np.empty((self._most_states, nr)),
+                np.empty((self._most_states, nr)), np.zeros(2))
+        X0, X1, C, end, ya, Pt, Ph, dta, dtb, Rb, Rb2, steps, cols, Y2, D, RW, info = work
+        X0[:] = 0.0
+        X0.flat[::nr + 1] = 1.0
         ig = self.ig
-        status = self.mod.cluster_step(np.array(Vc, dtype=float, order="C"), X1, out, rows, float(t0), float(t1),
-                                       y0, cm0.copy(), float(H), gtime.size, gtime, *first, self._poly, self.n,
-                                       *self._tableau, ig.I, ig.R, ig.WI, ig.WF, self._G, *self._work, end, ya, Pt, Ph,
-                                       dta, dtb, Rb, steps, cols, Y2, D, RW, info)
+        status = self.mod.cluster_step(X0, X1, C, rows, float(t0), float(t1), y0, cm0.copy(), float(H), gtime.size,
+                                       gtime, *first, self._poly, self.n, *self._tableau, ig.I, ig.R, ig.WI, ig.WF,
+                                       self._G, *self._work, end, ya, Pt, Ph, dta, dtb, Rb, Rb2, steps, cols, Y2, D,
+                                       RW, info)
         self._factored = None   # the compiled step factored other modes in the work arrays
         self.cluster_steps[int(info[1])] += 1
         if status:
             raise ContactTangentError(f"a grazing event at t = {info[0]:.9g} (its guard has no rate)")
-        return out.copy()
+        return C @ Vc   # the step is linear in the block: its matrix, then one product
 
     def _cluster_plan(self, rows, in_cluster, events, log, cm0, y0) -> tuple:
         """What the compiled ``cluster_step`` takes of a step's cluster besides its times and states: where each
         transition group starts among ``events`` (by time) and, as that function names them, ``gfc, gfg, goff,
-        gmc, gmto, gmg, mlo, mn, P, proj, PB, gyr``: the groups' fired guards and transitions (each one's contact,
-        mode, guard and the law states it resets), each sub-step's powers of ``A``'s block, the stick projections
-        and the fired guards' kept gradients. It depends on the modes, the rows and the transitions only, so it is
+        gmc, gmto, gmg, mlo, mn, Ab, proj, PB, gyr``: the groups' fired guards and transitions (each one's contact,
+        mode, guard and the law states it resets), each sub-step's block of ``A``, the stick projections and the
+        fired guards' kept gradients. It depends on the modes, the rows and the transitions only, so it is
         kept with the model's matrices."""
         lt, lc, lg, lf, lto = log
         groups, starts = [], []   # [(contact, guard, to), ...] by time, and each one's first event
@@ -947,8 +951,7 @@ class ContactTangent:
                 starts.append(q)
             groups[-1].append((int(lc[i]), int(lg[i]), int(lto[i])))
         ng, nr = len(groups), rows.size
-        degree = self._poly.size - 1
-        P = np.empty((ng + 1, degree, nr, nr))
+        Ab = np.empty((ng + 1, nr, nr))
         gyr = np.zeros((ng, nr))
         gfc = np.full(ng, -1, dtype=np.int64)
         gfg = np.zeros(ng, dtype=np.int64)
@@ -958,7 +961,7 @@ class ContactTangent:
         PB = np.zeros((ng, nr, nr))
         cm = cm0.copy()
         for g, group in enumerate(groups):
-            P[g] = self._block_powers(cm, y0, rows).reshape(degree, nr, nr)
+            Ab[g] = self._block(cm, y0, rows)
             fired = next(((j, gi) for j, gi, _ in group if gi >= 0), None)
             if fired is not None:
                 gfc[g], gfg[g] = fired
@@ -982,9 +985,9 @@ class ContactTangent:
                 proj[g] = 1
                 PB[g] = self._projection_block([j for j in in_cluster if self._rigid_stick(j, after[j])], rows)
             cm = after
-        P[ng] = self._block_powers(cm, y0, rows).reshape(degree, nr, nr)
+        Ab[ng] = self._block(cm, y0, rows)
         members = (np.array(x, dtype=np.int64) for x in (gmc, gmto, gmg, mlo, mn))
-        return (np.array(starts, dtype=np.int64), gfc, gfg, goff, *members, P, proj, PB, gyr)
+        return (np.array(starts, dtype=np.int64), gfc, gfg, goff, *members, Ab, proj, PB, gyr)
 
     def _cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1=None):
         """The rows ``rows`` of a step's tangent through the cluster's ``events`` (log indices, in time order);
