@@ -1,4 +1,4 @@
-"""The per-contact kernel's sub-step derivatives and guard differences, for the replayed tangent of its runs.
+"""The per-contact kernel's sub-step derivatives, guard differences and cluster steps, for the replayed tangent.
 
 A *template* (see :mod:`.contact_loop`), used by
 :class:`~blademodel.numeric.contact_tangent.ContactTangent` only: it is compiled
@@ -22,6 +22,11 @@ from the zero state where it predicts the guard's change along a probe at the
 event, and where it does not (the joint stick forces of a closed ring make a guard
 affine only piecewise) it is central differences at the event's state
 (``guard_derivatives``).
+
+``cluster_step`` takes a cluster's whole step through its events in one call: the
+sub-steps, the event times' rows, the resets' central differences and the stick
+projections, applied to the identity on the cluster's rows (the step is linear in the
+tangent), on the kernel's own cluster of those events as the active set.
 """
 
 import math  # noqa: F401

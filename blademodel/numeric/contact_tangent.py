@@ -89,9 +89,9 @@ SPARSE_STEPS_DENSITY = 0.25
 #: the dense power (squarings), which costs a product for each bit of the run's length.
 SPARSE_RUN_MAX = 16
 
-#: Step a cluster through its events in compiled code (``cluster_step`` of :mod:`.contact_replay`) where its
-#: transitions reset no law state and the laws have no labels; else, and with False, in Python
-#: (:meth:`ContactTangent._cluster_step`, the reference the compiled step is tested against).
+#: Step a cluster through its events in compiled code (``cluster_step`` of :mod:`.contact_replay`) where the laws
+#: have no labels; else, and with False, in Python (:meth:`ContactTangent._cluster_step`, the reference the
+#: compiled step is tested against).
 COMPILED_CLUSTER_STEPS = True
 
 
@@ -249,11 +249,11 @@ class ContactTangent:
         self._probe[self._labels] = 0.0   # a probe moves no label (a label a little off 0 reads as slip)
         self._factored = None   # the contact modes the stick problem in the work arrays is factored for
         self._cluster_sets, self._projections = caches["clusters"], caches["projections"]
-        self._resets = caches["resets"]
+        self._resets = caches["resets"]   # labelled laws' reset Jacobians, by contact, guard, mode and labels
         self._plans = caches["plans"]   # the compiled cluster steps' (:meth:`_cluster_plan`)
         self._cluster_work: dict = {}   # their work arrays, by the cluster's size
         #: compiled cluster steps taken on the whole model (0) and on the kernel's cluster alone (1)
-        self.cluster_steps = [0, 0]   # labelled laws' reset Jacobians, by contact, guard, mode and labels
+        self.cluster_steps = [0, 0]
         # the modes' powers of A and of its blocks (the blocks themselves the first), from which R(hA) is assembled
         # at any step
         self._powers_of_A = caches["powers"]
