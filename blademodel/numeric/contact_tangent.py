@@ -802,16 +802,18 @@ class ContactTangent:
         self.ig._clear_near_marks()   # guards without the kernel's offsets for early-fired contacts
         self._factored = None         # the kernel has used the work arrays since
         steps = rec_t.shape[0] - 1
+        # the steps whose modes differ from the step's before: a run of whole steps ends at the first of them
+        changes = np.append(np.flatnonzero(np.any(rec_cm[1:steps] != rec_cm[:steps - 1], axis=1)) + 1, steps)
         k = 0
         while k < steps:
             t0, t1 = float(rec_t[k]), float(rec_t[k + 1])
             cm0 = rec_cm[k].astype(np.int64)
             if not (ie < n_log and lt[ie] <= t1):
-                # a run of whole steps without events in one mode: one product by R(hA) to the run's length
-                j = k + 1
-                while j < steps and not (ie < n_log and lt[ie] <= rec_t[j + 1]) and np.array_equal(rec_cm[j],
-                                                                                                   rec_cm[k]):
-                    j += 1
+                # a run of whole steps without events in one mode: one product by R(hA) to the run's length. It ends
+                # at the next change of modes, the step that holds the next event, or the record's end
+                j = int(changes[np.searchsorted(changes, k, side="right")])
+                if ie < n_log:
+                    j = min(j, int(np.searchsorted(rec_t[1:steps + 1], lt[ie], side="left")))
                 short = self._sparse_steps and j - k <= SPARSE_RUN_MAX
                 R = self._step_matrix(H, cm0, rec_y[k]) if short else None
                 if R is not None and hasattr(R, "toarray"):   # sparse: a short run step by step
