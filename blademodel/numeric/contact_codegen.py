@@ -10,6 +10,7 @@ of contacts or blades.
 
 from __future__ import annotations
 
+import ast
 import inspect
 
 from ..components.friction.base import FrictionLaw
@@ -52,11 +53,14 @@ _FORCEINLINE = ("contact_forces", "forcing_phase", "rates", "guards_of_forces", 
                 "copy_all_guards")
 
 
-def template_functions(module) -> list[str]:
-    """Names of the functions a template defines, in source order."""
-    own = [(obj.__code__.co_firstlineno, name) for name, obj in vars(module).items()
-           if inspect.isfunction(obj) and obj.__module__ == module.__name__]
-    return [name for _, name in sorted(own)]
+def template_functions(source: str) -> list[str]:
+    """Names of the functions a template's ``source`` defines, in source order.
+
+    Read from the source that is pasted, not from the imported module: a process that
+    imported the templates before they were edited would otherwise compile the new text
+    with the old list of functions, and cache a module that cannot compile under the new
+    sources' hash."""
+    return [node.name for node in ast.parse(source).body if isinstance(node, ast.FunctionDef)]
 
 
 # Every function is compiled without Numba's reference counting (``_nrt=False``):
@@ -132,9 +136,10 @@ def generate_contact_kernel(laws: list[FrictionLaw]) -> tuple[str, dict]:
     functions: list[str] = []
     for mod in templates:
         L.append(f"# ---- {mod.__name__} ----")
-        L.append(direct_views(inspect.getsource(mod)))
+        source = inspect.getsource(mod)
+        L.append(direct_views(source))
         L.append("")
-        functions += [f for f in template_functions(mod) if f not in functions]
+        functions += [f for f in template_functions(source) if f not in functions]
     fns = [f"law{K}_{f}" for K in range(len(codes))
            for f in ("force", "rates", "guards", "guard_rates", "force_rate", "transition", "energy",
                       "dissipation")]
