@@ -275,6 +275,38 @@ def test_the_compiled_cluster_step_is_the_python_one(monkeypatch, case):
     assert scaled_error(fast, reference, orbit.scale) < 1e-12
 
 
+def test_a_cluster_larger_than_the_compiled_bound_is_stepped_in_python(monkeypatch):
+    """Clusters of more than ``COMPILED_CLUSTER_ROWS`` rows (a ring that sticks closed is one) take the Python
+    steps, whose products go to BLAS; the monodromy is the same to rounding."""
+    from blademodel.numeric import contact_tangent
+    ig, orbit = ring_orbit("coulomb", blades=6, engine_order=2, mistuning_std=0.05, mistuning_seed=1, F0=120.0)
+    sizes = {"compiled": [], "python": []}
+    compiled, python = (contact_tangent.ContactTangent._compiled_cluster_step,
+                        contact_tangent.ContactTangent._cluster_step)
+
+    def sized(name, f):
+        def g(self, Vc, rows, *a, **k):
+            sizes[name].append(rows.size)
+            return f(self, Vc, rows, *a, **k)
+        return g
+
+    monkeypatch.setattr(contact_tangent.ContactTangent, "_compiled_cluster_step", sized("compiled", compiled))
+    monkeypatch.setattr(contact_tangent.ContactTangent, "_cluster_step", sized("python", python))
+
+    def monodromy():
+        contact_tangent._CACHES.clear()
+        return PeriodMap(ig, 1, jacobian="tangent", workers=1).derivatives(orbit.state, orbit.mode.copy()).monodromy
+
+    compiled_all = monodromy()
+    assert not sizes["python"] and max(sizes["compiled"]) <= contact_tangent.COMPILED_CLUSTER_ROWS
+    bound, taken = min(sizes["compiled"]) - 1, len(sizes["compiled"])
+    sizes.update(compiled=[], python=[])
+    monkeypatch.setattr(contact_tangent, "COMPILED_CLUSTER_ROWS", bound)   # every cluster larger than the bound
+    in_python = monodromy()
+    assert not sizes["compiled"] and len(sizes["python"]) == taken
+    assert scaled_error(in_python, compiled_all, orbit.scale) < 1e-12
+
+
 def test_auto_takes_the_tangent_on_a_ring():
     """``jacobian="auto"`` on the per-contact kernel replays the residual's own run: one integration, not the
     ``2 n`` of central differences, and the matrix is the tangent's."""
