@@ -414,10 +414,13 @@ class ContactTangent:
         key = (self._key(cm, y), rows.tobytes())
         P = self._powers_of_A.get(key)
         if P is None:
-            A = self.flow_matrix(cm, y)
-            sub = A[rows][:, rows].toarray() if hasattr(A, "toarray") else A[np.ix_(rows, rows)]
-            P = self._powers_of_A[key] = amplification_powers(sub, self._poly.size - 1)
+            P = self._powers_of_A[key] = amplification_powers(self._block_of_A(cm, y, rows), self._poly.size - 1)
         return P
+
+    def _block_of_A(self, cm, y, rows) -> np.ndarray:
+        """``A``'s block on ``rows`` in the mode ``cm``, from the kept ``A`` (built and checked once)."""
+        A = self.flow_matrix(cm, y)
+        return A[rows][:, rows].toarray() if hasattr(A, "toarray") else A[np.ix_(rows, rows)]
 
     def _block(self, cm, y, rows) -> np.ndarray:
         """``A``'s block on ``rows`` in the mode ``cm`` (the first of its kept powers)."""
@@ -970,7 +973,7 @@ class ContactTangent:
         PB = np.zeros((ng, nr, nr))
         cm = cm0.copy()
         for g, group in enumerate(groups):
-            Ab[g] = self._block(cm, y0, rows)
+            Ab[g] = self._block_of_A(cm, y0, rows)   # (the compiled step builds R(hA) by Horner's rule)
             fired = next(((j, gi) for j, gi, _ in group if gi >= 0), None)
             if fired is not None:
                 gfc[g], gfg[g] = fired
@@ -994,7 +997,7 @@ class ContactTangent:
                 proj[g] = 1
                 PB[g] = self._projection_block([j for j in in_cluster if self._rigid_stick(j, after[j])], rows)
             cm = after
-        Ab[ng] = self._block(cm, y0, rows)
+        Ab[ng] = self._block_of_A(cm, y0, rows)
         members = (np.array(x, dtype=np.int64) for x in (gmc, gmto, gmg, mlo, mn))
         return (np.array(starts, dtype=np.int64), gfc, gfg, goff, *members, Ab, proj, PB, gyr)
 
