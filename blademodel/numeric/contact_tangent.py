@@ -55,8 +55,8 @@ from .tangent import SensitivityError
 #: would give, bit for bit, so a branch does not depend on what was computed before it.
 _CACHES: OrderedDict = OrderedDict()
 _KEEP = 4
-#: The most bytes the modes' matrices ``A`` of one model may hold; the guard gradients, clusters, projections and
-#: resets get an eighth of it each, the powers of ``A`` (:data:`POWERS_BELOW`) and of its blocks a quarter, and a
+#: The most bytes the modes' matrices ``A`` of one model may hold; the guard gradients, clusters, projections,
+#: resets and the compiled cluster steps' plans get an eighth of it each, the powers of ``A`` (:data:`POWERS_BELOW`) and of its blocks a quarter, and a
 #: sparse ``A``'s powers on their pattern (:data:`SPARSE_STEPS_FROM`) another quarter.
 #: A long continuation of a ring meets thousands of modes (4888 on the
 #: 24-blade ring from 270 to 300 rad/s, 360 MB of dense ``A``; from :data:`GROUPED_FROM` states on they are
