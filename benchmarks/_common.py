@@ -19,6 +19,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -202,6 +203,19 @@ def interleaved(funcs: dict, repeats: int, clock=cpu_time) -> dict:
             f()
             times[k].append(clock() - t0)
     return times
+
+
+def compare_ways(ways: dict, run: Callable, repeats: int) -> tuple[dict, dict]:
+    """``run()`` after each of ``ways`` (name: a function that sets that way up), ``repeats`` times interleaved,
+    CPU time of the process (BLAS threads included): the least time and the last result of each way."""
+    results = {}
+
+    def timed(way):
+        ways[way]()
+        results[way] = run()
+
+    times = interleaved({w: (lambda w=w: timed(w)) for w in ways}, repeats, clock=time.process_time)
+    return {w: min(t) for w, t in times.items()}, results
 
 
 def python_env(**extra) -> dict:

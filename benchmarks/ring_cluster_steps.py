@@ -56,8 +56,11 @@ REPLAYS = {"24 blades, mistuned": MISTUNED, "48 blades, mistuned": {"blades": "4
            "96 blades, mistuned": {"blades": "96", **MISTUNED}}
 
 
-def compiled(on: bool) -> None:
+def compiled(on: bool, clear: bool = False) -> None:
+    """Cluster steps compiled (``on``, the default) or in Python; with ``clear`` the kept matrices emptied."""
     contact_tangent.COMPILED_CLUSTER_STEPS = on
+    if clear:
+        contact_tangent._CACHES.clear()
 
 
 def replay_rows(repeats: int) -> list:
@@ -69,24 +72,23 @@ def replay_rows(repeats: int) -> list:
         P = PeriodMap(make_integrator(model), 1, jacobian="tangent", workers=1)
         r = P.run(orbit.state, orbit.mode)
         tangent = contact_tangent.ContactTangent(P._ig)
-        out = {}
 
-        def replay(on, count=10):
-            compiled(on)
+        def replays(count=10):   # as a continuation's next point needs them: R(hA) and its powers afresh
             for _ in range(count):
                 tangent._R = contact_tangent._Kept(contact_tangent.KEEP_BYTES // 8)
                 tangent._powers = contact_tangent._Kept(contact_tangent.KEEP_BYTES // 8)
-                out[on] = tangent.monodromy(r.t, r.states, r.modes, r.log, r.n_log)
+                M = tangent.monodromy(r.t, r.states, r.modes, r.log, r.n_log)
+            return M
 
-        replay(True, 1)
-        replay(False, 1)   # the plans and the modes' matrices kept, as from point to point
-        times = C.interleaved({"python": lambda: replay(False), "compiled": lambda: replay(True)}, repeats,
-                              clock=time.process_time)
+        ways = {"python": lambda: compiled(False), "compiled": lambda: compiled(True)}
+        for way in ways.values():   # the plans and the modes' matrices kept, as from point to point
+            way()
+            replays(1)
+        t, out = C.compare_ways(ways, replays, repeats)
         compiled(True)
-        M, ref = out[True], out[False]
+        M, ref = out["compiled"], out["python"]
         rows.append({"case": f"one replay, {name}", "states": int(P.n), "events": int(r.events),
-                     "before_s": min(times["python"]) / 10, "now_s": min(times["compiled"]) / 10,
-                     "gain": min(times["python"]) / min(times["compiled"]),
+                     "before_s": t["python"] / 10, "now_s": t["compiled"] / 10, "gain": t["python"] / t["compiled"],
                      "difference": float(np.max(np.abs(M - ref)) / np.max(np.abs(ref)))})
         print(f"  {rows[-1]['case']}: {rows[-1]['gain']:.2f} x", flush=True)
     return rows
@@ -101,21 +103,14 @@ def main() -> int:
     rows = replay_rows(args.repeats)
     for name, (overrides, opts) in CASES.items():
         C.ring_continuation(overrides, {**opts, "max_points": 2})   # compile (or load) the kernel before timing
-        branches = {}
-
-        def timed(on):
-            compiled(on)
-            contact_tangent._CACHES.clear()
-            branches[on] = C.ring_continuation(overrides, opts)
-
-        times = C.interleaved({"python": lambda: timed(False), "compiled": lambda: timed(True)}, args.repeats,
-                              clock=time.process_time)
+        t, branches = C.compare_ways({"python": lambda: compiled(False, clear=True),
+                                      "compiled": lambda: compiled(True, clear=True)},
+                                     lambda: C.ring_continuation(overrides, opts), args.repeats)
         compiled(True)
-        b = branches[True]
+        b = branches["compiled"]
         rows.append({"case": name, "states": int(b.states.shape[1]), "points": int(b.params.size),
-                     "replays": int(b.replays), "before_s": min(times["python"]), "now_s": min(times["compiled"]),
-                     "gain": min(times["python"]) / min(times["compiled"]),
-                     "difference": C.same(b, branches[False])})
+                     "replays": int(b.replays), "before_s": t["python"], "now_s": t["compiled"],
+                     "gain": t["python"] / t["compiled"], "difference": C.same(b, branches["python"])})
         print(f"  {name}: {rows[-1]['gain']:.2f} x", flush=True)
     print(C.table(rows, [("case", "case", "s"), ("states", "states", "d"), ("points", "points", "d"),
                          ("replays", "replays", "d"), ("before_s", "Python s", ".3f"),

@@ -72,17 +72,10 @@ def main() -> int:
     rows = []
     for name, (overrides, opts) in CASES.items():
         C.ring_continuation(overrides, {**opts, "max_points": 2})   # compile (or load) the kernel before timing
-        branches = {}
-
-        def timed(way):
-            now(way)
-            branches[way] = C.ring_continuation(overrides, opts)
-
-        ways = ("dense", "horner", "powers")
-        times = C.interleaved({w: (lambda w=w: timed(w)) for w in ways}, args.repeats, clock=time.process_time)
+        t, branches = C.compare_ways({w: (lambda w=w: now(w)) for w in ("dense", "horner", "powers")},
+                                     lambda: C.ring_continuation(overrides, opts), args.repeats)
         now("powers")
         b = branches["powers"]
-        t = {w: min(times[w]) for w in ways}
         rows.append({"case": name, "states": int(b.states.shape[1]), "points": int(b.params.size),
                      "replays": int(b.replays), "before_s": t["dense"], "horner_s": t["horner"], "now_s": t["powers"],
                      "gain_horner": t["dense"] / t["horner"], "gain": t["dense"] / t["powers"],

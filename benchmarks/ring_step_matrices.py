@@ -72,19 +72,13 @@ def main() -> int:
     rows = []
     for name, (overrides, opts) in CASES.items():
         run(overrides, {**opts, "stop": opts["start"] + 0.5})   # compile (or load) the kernels before timing
-        branches = {}
-
-        def timed(on):
-            now(on)
-            branches[on] = run(overrides, opts)
-
-        times = C.interleaved({"before": lambda: timed(False), "now": lambda: timed(True)}, args.repeats,
-                              clock=time.process_time)
+        t, branches = C.compare_ways({"before": lambda: now(False), "now": lambda: now(True)},
+                                     lambda: run(overrides, opts), args.repeats)
         now(True)
-        b = branches[True]
+        b = branches["now"]
         rows.append({"case": name, "points": int(b.params.size), "replays": int(b.replays),
-                     "before_s": min(times["before"]), "now_s": min(times["now"]),
-                     "gain": min(times["before"]) / min(times["now"]), "difference": same(b, branches[False])})
+                     "before_s": t["before"], "now_s": t["now"], "gain": t["before"] / t["now"],
+                     "difference": same(b, branches["before"])})
         print(f"  {name}: {rows[-1]['gain']:.2f} x", flush=True)
     print(C.table(rows, [("case", "24-blade ring", "s"), ("points", "points", "d"), ("replays", "replays", "d"),
                          ("before_s", "Horner s", ".2f"), ("now_s", "kept powers s", ".2f"),

@@ -158,32 +158,33 @@ def replay_guard(t, y, cm, j, gi, rows, steps, d, gyr, I, R, WI, WF, G, Y, out):
 def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, Ab, proj,
                  PB, gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta, dtb,
                  Rb, Rb2, steps, cols, Y2, D, RW, info):
-    """One step's tangent on a cluster's rows through its transition groups, into ``out``; 0, or 1 where a guard
-    that fired has no rate (its time in ``info[0]``).
+    """A step through a cluster's transition groups applied to ``X0`` (on the cluster's ``rows``), into ``out``;
+    0, or 1 where a guard that fired has no rate (its time in ``info[0]``).
 
-    The sub-steps evaluate the kernel's cluster of these events only (its active set, as the
-    kernel stepped them), where that cluster holds ``rows`` (``info[1]`` 1), else the whole
-    model (``info[1]`` 0); the whole model is active again on return.
+    The compiled form of ``ContactTangent._cluster_step`` for laws without labels; its
+    caller passes the identity as ``X0`` (overwritten; ``X1`` the same shape, work) and gets
+    the step's matrix on ``rows``. The sub-steps evaluate the kernel's cluster of these
+    events only (its active set, as the kernel stepped them) where that cluster holds
+    ``rows`` (``info[1]`` 1), else the whole model (``info[1]`` 0); the whole model is
+    active again on return.
 
-    The compiled form of ``ContactTangent._cluster_step`` for laws without labels. ``X0``:
-    the tangent's block on ``rows`` at the
-    step's start (overwritten; ``X1`` the same shape, work). The step from ``t0`` to
-    ``t1`` (``H`` the whole step's length) starts at ``y0`` in the modes ``cm`` (changed
-    to the step's end modes). Group ``g < ng`` of transitions, all at ``gtime[g]``: the
-    guard ``gfg[g]`` of contact ``gfc[g]`` fired it (``-1``: none, a mode the friction
-    problem set), its transitions set contact ``gmc[q]`` to mode ``gmto[q]`` for ``q``
-    in ``goff[g] .. goff[g + 1]``, fired by its guard ``gmg[q]`` and resetting the ``mn[q]``
-    law states from row ``mlo[q]`` (none where ``mn[q]`` is 0): their rows of the block are the reset's central differences
-    in ``rows`` at the event (as ``ContactTangent._reset_jacobian``'s, ``nphys`` the physical
-    states), and where ``proj[g]`` a rigid contact starts to stick
-    and the block is projected by ``PB[g]``. ``gyr[g]``: the fired guard's kept gradient
-    on ``rows``. ``Ab[g]``: ``A``'s block on ``rows`` in the modes of the sub-step before
-    group ``g`` (``Ab[ng]``: after the last); ``poly``: the method's stability polynomial,
-    lowest power first (``R(hA)`` on the block by Horner's rule). The rest are work
-    arrays: the sub-step's (:func:`substep_derivatives`), ``ya`` (a full state), ``dta,
-    dtb`` (a row of the block each), ``Rb, Rb2`` (a block of ``A``'s each), ``steps, cols`` (a
-    row's length each), ``Y2`` (a full state), ``D`` and ``RW`` (the most law states by a
-    row's length and by a row of the block).
+    The step from ``t0`` to ``t1`` (``H`` the whole step's length) starts at ``y0`` in the
+    modes ``cm`` (changed to the step's end modes). Group ``g < ng`` of transitions, all at
+    ``gtime[g]``: the guard ``gfg[g]`` of contact ``gfc[g]`` fired it (``-1``: none, a mode
+    the friction problem set, no event time to move); its transitions ``q`` in ``goff[g] ..
+    goff[g + 1]`` set contact ``gmc[q]`` to mode ``gmto[q]`` by its guard ``gmg[q]`` and
+    reset the ``mn[q]`` law states from row ``mlo[q]`` (none where ``mn[q]`` is 0), whose
+    rows of the block become the reset's central differences in ``rows`` (as
+    ``ContactTangent._reset_jacobian``'s; ``nphys``: the physical states); where
+    ``proj[g]`` a rigid contact starts to stick and the block is projected by ``PB[g]``.
+    ``gyr[g]``: the fired guard's kept gradient on ``rows``. ``Ab[g]``: ``A``'s block on
+    ``rows`` in the modes of the sub-step before group ``g`` (``Ab[ng]``: after the last).
+    ``poly``: the method's stability polynomial, lowest power first (``R(hA)`` on the block
+    by Horner's rule). The rest are work arrays: the sub-step's
+    (:func:`substep_derivatives`), ``ya`` and ``Y2`` (a full state each), ``dta, dtb`` (a
+    row of the block each), ``Rb, Rb2`` (a block of ``A``'s each), ``steps, cols`` (a row's
+    length each), ``D`` and ``RW`` (the most law states by a row's length and by a row of
+    the block).
     """
     nr = rows.shape[0]
     m = X0.shape[1]
@@ -191,9 +192,9 @@ def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff
     deg = poly.shape[0] - 1
     d = 1e-6 * H
     info[1] = activate_cluster(rows, gmc, cm, I, WI, ns)
-    status = cluster_steps(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, Ab,
-                           proj, PB, gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya,
-                           Pt, Ph, dta, dtb, Rb, Rb2, steps, cols, Y2, D, RW, info, nr, m, ns, deg, d)
+    status = through_groups(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, Ab,
+                            proj, PB, gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya,
+                            Pt, Ph, dta, dtb, Rb, Rb2, steps, cols, Y2, D, RW, info, nr, m, ns, deg, d)
     set_full(WI)  # noqa: F821
     return status
 
@@ -223,9 +224,9 @@ def activate_cluster(rows, gmc, cm, I, WI, ns):
     return 1
 
 
-def cluster_steps(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, Ab, proj,
-                  PB, gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta,
-                  dtb, Rb, Rb2, steps, cols, Y2, D, RW, info, nr, m, ns, deg, d):
+def through_groups(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, Ab, proj,
+                   PB, gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta,
+                   dtb, Rb, Rb2, steps, cols, Y2, D, RW, info, nr, m, ns, deg, d):
     """:func:`cluster_step`'s sequence, on the active set it chose."""
     for k in range(ns):
         ya[k] = y0[k]

@@ -919,12 +919,13 @@ class ContactTangent:
         step's matrix on the cluster's rows (the sequence applied to the identity), then its product with ``Vc``."""
         lt, lc, lg, lf, lto = log
         ev = np.asarray(events, dtype=np.int64)
+        times = lt[ev]
         key = (rows.tobytes(), cm0.tobytes(), lc[ev].tobytes(), lg[ev].tobytes(), lto[ev].tobytes(),
-               np.diff(lt[ev]).astype(bool).tobytes())
+               np.diff(times).astype(bool).tobytes())   # (which events share a time: the groups)
         plan = self._plans.get(key)
         if plan is None:
             plan = self._plans[key] = self._cluster_plan(rows, in_cluster, events, log, cm0, y0)
-        gtime, first = lt[ev][plan[0]], plan[1:]
+        gtime, first = times[plan[0]], plan[1:]
         nr = rows.size
         work = self._cluster_work.get(nr)
         if work is None:
