@@ -264,12 +264,12 @@ def test_the_compiled_cluster_step_is_the_python_one(monkeypatch, case):
         P = PeriodMap(ig, 1, jacobian="tangent", workers=1)
         return P.derivatives(orbit.state, orbit.mode.copy()).monodromy, P._contact_tangent.cluster_steps
 
-    fast, (whole, local) = monodromy(True)
+    fast, (whole, local, fallen_back) = monodromy(True)
     taken = dict(calls)
     calls.update(compiled=0, python=0)
     reference, _ = monodromy(False)
     assert calls["compiled"] == 0 and calls["python"] == taken["compiled"] + taken["python"] >= 20
-    assert taken["python"] == 0 and whole + local == taken["compiled"]
+    assert taken["python"] == 0 and whole + local == taken["compiled"] and fallen_back == 0
     if case == "mistuned":   # clusters of a few blades: their sub-steps evaluate them alone, as the kernel did
         assert local > 0
     assert scaled_error(fast, reference, orbit.scale) < 1e-12
@@ -386,6 +386,58 @@ def test_the_iwan_ring_s_tangent_holds_the_labels_the_kernel_set():
     ref = hold_discrete(P.differences(orbit.state, orbit.mode.copy(), orbit.scale, 1e-5), ig.discrete_states)
     assert scaled_error(M, ref, orbit.scale) < 2e-6
     assert P.replays == 1
+
+
+def test_the_iwan_ring_s_compiled_cluster_step_is_the_python_one(monkeypatch):
+    """On the preloaded 4-blade Iwan ring (labels, resets decided from the state, one-sided differences), the
+    compiled cluster steps follow plans recorded from the Python step (its blocks of ``A``, the labels each
+    transition set and the resets' Jacobians for them) and give the Python steps' monodromy to rounding, from the
+    first replay on: a second replay records nothing and is the first to the bit. The compiled step uses the
+    recorded resets (dropped, the monodromy changes) and checks the labels: a plan whose recorded labels a
+    transition does not set is stepped in Python, with the Python steps' monodromy."""
+    from blademodel.numeric import contact_tangent
+    ig, orbit = _iwan_ring_orbit()
+    recorded = []
+    python_step = contact_tangent.ContactTangent._cluster_step
+
+    def counted(self, Vc, *a, **k):
+        recorded.append(Vc.shape[1] == 0)
+        return python_step(self, Vc, *a, **k)
+
+    monkeypatch.setattr(contact_tangent.ContactTangent, "_cluster_step", counted)
+
+    def replay(compiled_steps, clear=True):
+        monkeypatch.setattr(contact_tangent, "COMPILED_CLUSTER_STEPS", compiled_steps)
+        if clear:
+            contact_tangent._CACHES.clear()
+        P = PeriodMap(ig, 1, jacobian="tangent", workers=1)
+        return P.derivatives(orbit.state, orbit.mode.copy()).monodromy, P._contact_tangent
+
+    reference, _ = replay(False)
+    steps = len(recorded)
+    assert steps >= 20 and not any(recorded)
+    recorded.clear()
+    first, tangent = replay(True)
+    assert len(recorded) == steps and all(recorded)   # each step's plan recorded on no columns, once
+    assert sum(tangent.cluster_steps[:2]) == steps and tangent.cluster_steps[2] == 0
+    assert scaled_error(first, reference, orbit.scale) < 1e-12
+    recorded.clear()
+    second, tangent = replay(True, clear=False)
+    assert not recorded and sum(tangent.cluster_steps[:2]) == steps
+    np.testing.assert_array_equal(second, first)
+
+    plans = next(iter(contact_tangent._CACHES.values()))["plans"]
+    kept = {key: plans.get(key) for key in list(plans._d)}
+    assert any(plan.RB.size for plan in kept.values())
+    for key, plan in kept.items():   # the recorded resets' rows dropped
+        plans[key] = plan._replace(RB=np.zeros_like(plan.RB))
+    dropped, _ = replay(True, clear=False)
+    assert scaled_error(dropped, reference, orbit.scale) > 1e-3
+    for key, plan in kept.items():
+        plans[key] = plan._replace(ltg=plan.ltg + 2.0)   # labels no transition sets
+    checked, tangent = replay(True, clear=False)
+    assert tangent.cluster_steps[2] > 0
+    assert scaled_error(checked, reference, orbit.scale) < 1e-12
 
 
 def test_a_reset_that_decides_otherwise_than_the_kernel_is_taken_a_little_farther_along_the_flow():

@@ -31,7 +31,7 @@ tangent), on the kernel's own cluster of those events as the active set.
 
 import math  # noqa: F401
 
-from blademodel.numeric.contract import H_N, H_NC, NONNEG, W_NB, W_STAMP, WC_SEED
+from blademodel.numeric.contract import H_N, H_NC, NONNEG, O_CLAW, W_NB, W_STAMP, WC_SEED
 
 
 def substep_derivatives(t, y, h, cm, d, Ar, rows, ta, tb, tc, I, R, WI, WF, K, Kh, Kt, BT, Y, Z, F, end, Pt, Ph):
@@ -156,8 +156,8 @@ def replay_guard(t, y, cm, j, gi, rows, steps, d, gyr, I, R, WI, WF, G, Y, out):
 
 
 def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, Ab, proj,
-                 PB, gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta, dtb,
-                 Rb, Rb2, steps, cols, Y2, D, RW, info):
+                 PB, gyr, rk, RB, RM, lfo, lrow, ltg, hs, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z,
+                 F, end, ya, Pt, Ph, dta, dtb, Rb, Rb2, steps, cols, Y2, D, RW, info):
     """A step through a cluster's transition groups applied to ``X0`` (on the cluster's ``rows``), into ``out``;
     0, or 1 where a guard that fired has no rate (its time in ``info[0]``).
 
@@ -176,8 +176,19 @@ def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff
     reset the ``mn[q]`` law states from row ``mlo[q]`` (none where ``mn[q]`` is 0), whose
     rows of the block become the reset's central differences in ``rows`` (as
     ``ContactTangent._reset_jacobian``'s; ``nphys``: the physical states); where
-    ``proj[g]`` a rigid contact starts to stick and the block is projected by ``PB[g]``.
-    ``gyr[g]``: the fired guard's kept gradient on ``rows``. ``Ab[g]``: ``A``'s block on
+    ``proj[g]`` is not 0 a rigid contact starts to stick and the block is projected by
+    ``PB[proj[g] - 1]``. ``gyr[g]``: the fired guard's kept gradient on ``rows`` (NaN: none,
+    central differences at the event).
+
+    A law with labels (the Iwan elements' modes): its transitions ``q`` with ``rk[q] > 0``
+    are *recorded* (from the Python step's first run of the plan): their reset is taken past
+    the guard's root where the state lies short of it, and a little farther along the flow
+    (``1e-14`` of the kernel's step ``hs``, ten times more each try, up to ``1e-8``) until it
+    sets the labels ``lrow[lfo[q]:lfo[q + 1]]`` to the recorded ``ltg[...]``
+    (:func:`decided_transition`), and the block's rows ``RM[rk[q] - 1, s]`` (its law states'
+    among ``rows``, up to the first ``-1``) become ``RB[rk[q] - 1, s]`` times the block (the
+    reset's Jacobian for these labels, affine, as ``ContactTangent._reset_jacobian`` took it). Where no try sets them, 2 and the time in
+    ``info[0]``: the caller steps the cluster in Python. ``Ab[g]``: ``A``'s block on
     ``rows`` in the modes of the sub-step before group ``g`` (``Ab[ng]``: after the last).
     ``poly``: the method's stability polynomial, lowest power first (``R(hA)`` on the block
     by Horner's rule). The rest are work arrays: the sub-step's
@@ -193,8 +204,9 @@ def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff
     d = 1e-6 * H
     info[1] = activate_cluster(rows, gmc, cm, I, WI, ns)
     status = through_groups(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, Ab,
-                            proj, PB, gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya,
-                            Pt, Ph, dta, dtb, Rb, Rb2, steps, cols, Y2, D, RW, info, nr, m, ns, deg, d)
+                            proj, PB, gyr, rk, RB, RM, lfo, lrow, ltg, hs, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K,
+                            Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta, dtb, Rb, Rb2, steps, cols, Y2, D, RW, info, nr,
+                            m, ns, deg, d)
     set_full(WI)  # noqa: F821
     return status
 
@@ -225,8 +237,8 @@ def activate_cluster(rows, gmc, cm, I, WI, ns):
 
 
 def through_groups(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff, gmc, gmto, gmg, mlo, mn, Ab, proj,
-                   PB, gyr, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y, Z, F, end, ya, Pt, Ph, dta,
-                   dtb, Rb, Rb2, steps, cols, Y2, D, RW, info, nr, m, ns, deg, d):
+                   PB, gyr, rk, RB, RM, lfo, lrow, ltg, hs, poly, nphys, ta, tb, tc, I, R, WI, WF, G, K, Kh, Kt, BT, Y,
+                   Z, F, end, ya, Pt, Ph, dta, dtb, Rb, Rb2, steps, cols, Y2, D, RW, info, nr, m, ns, deg, d):
     """:func:`cluster_step`'s sequence, on the active set it chose."""
     for k in range(ns):
         ya[k] = y0[k]
@@ -305,18 +317,25 @@ def through_groups(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff,
             for c in range(m):
                 dst[r, c] += a * dtb[c]
         for q in range(goff[g], goff[g + 1]):
-            if mn[q] > 0:
+            if rk[q] > 0:
+                if decided_transition(te, end, cm, gmc[q], gmg[q], lrow[lfo[q]:lfo[q + 1]], ltg[lfo[q]:lfo[q + 1]],
+                                      hs, I, R, WI, WF, G, Y2, F, Y) == 0:
+                    info[0] = te
+                    return 2
+                replace_rows(dst, RB[rk[q] - 1], RM[rk[q] - 1], RW)
+            elif mn[q] > 0:
                 reset_rows(te, end, y0, cm, gmc[q], gmg[q], mlo[q], mn[q], rows, nphys, dst, I, R, WI,
                            WF, G, Y2, D, RW)
             cm[gmc[q]] = gmto[q]
         cur = 1 - cur   # the block is in dst now
         if proj[g] != 0:
             other = src   # free: the block is in dst
+            P = PB[proj[g] - 1]
             for r in range(nr):
                 for c in range(m):
                     other[r, c] = 0.0
                 for q in range(nr):
-                    a = PB[g, r, q]
+                    a = P[r, q]
                     if a != 0.0:
                         for c in range(m):
                             other[r, c] += a * dst[q, c]
@@ -370,3 +389,87 @@ def reset_rows(t, y, y0, cm, j, gi, lo, nst, rows, nphys, V, I, R, WI, WF, G, Y2
             for c in range(m):
                 V[r, c] = RW[rows[r] - lo, c]
     apply_transition(t, y, cm, j, gi, I, R, WI, WF, G)  # noqa: F821
+
+
+def crossed_to(g, d):
+    """Whether a guard of value ``g`` lies past its root in its direction ``d`` (``-1``: falling, ``1``: rising)."""
+    return (d < 0 and g < 0.0) or (d > 0 and g > 0.0)
+
+
+def same_labels(y, lrow, ltg):
+    """Whether ``y``'s labels ``lrow`` are ``ltg``."""
+    for i in range(lrow.shape[0]):
+        if y[lrow[i]] != ltg[i]:
+            return False
+    return True
+
+
+def decided_transition(t, y, cm, j, gi, lrow, ltg, hs, I, R, WI, WF, G, Y2, F, Y):
+    """Contact ``j``'s transition by guard ``gi`` at ``(t, y)`` in ``cm`` where its law decides labels from the
+    state, as the kernel decided them (``ContactTangent._past_root`` and ``_as_the_kernel``): 1 with ``y`` the
+    state after it, its labels ``lrow`` the recorded ``ltg``; 0 (``y`` unchanged) where no try sets them.
+
+    The kernel fires at the far end of its event's bracket: a state short of the guard's
+    root (by rounding) is moved along the flow by ``1e-14`` of the step ``hs``, ten times
+    more each try up to ``1e-8``, until the guard has crossed; then, from there, likewise
+    until the transition sets the recorded labels. ``Y2``, ``F``, ``Y``: full states, work."""
+    ns = y.shape[0]
+    K = I[I[O_CLAW] + j]
+    d = GDIR[K, cm[j], gi]  # noqa: F821
+    for k in range(ns):
+        Y2[k] = y[k]
+    if d != 0:
+        factor_stick(cm, I, R, WI, WF)  # noqa: F821
+        eval_guards(t, y, cm, I, R, WI, WF, G)  # noqa: F821
+        if not crossed_to(G[j, gi], d):
+            rhs(t, y, cm, I, R, WI, WF, F)  # noqa: F821
+            for e in range(14, 7, -1):
+                dt = 10.0 ** -e * hs
+                for k in range(ns):
+                    Y[k] = y[k] + dt * F[k]
+                eval_guards(t + dt, Y, cm, I, R, WI, WF, G)  # noqa: F821
+                if crossed_to(G[j, gi], d):
+                    for k in range(ns):
+                        Y2[k] = Y[k]
+                    break
+    for k in range(ns):
+        Y[k] = Y2[k]
+    apply_transition(t, Y, cm, j, gi, I, R, WI, WF, G)  # noqa: F821
+    if not same_labels(Y, lrow, ltg):
+        factor_stick(cm, I, R, WI, WF)  # noqa: F821
+        rhs(t, Y2, cm, I, R, WI, WF, F)  # noqa: F821
+        decided = False
+        for e in range(14, 7, -1):
+            dt = 10.0 ** -e * hs
+            for k in range(ns):
+                Y[k] = Y2[k] + dt * F[k]
+            apply_transition(t, Y, cm, j, gi, I, R, WI, WF, G)  # noqa: F821
+            if same_labels(Y, lrow, ltg):
+                decided = True
+                break
+        if not decided:
+            return 0
+    for k in range(ns):
+        y[k] = Y[k]
+    return 1
+
+
+def replace_rows(V, B, M, RW):
+    """The rows ``M[s]`` of ``V`` replaced by ``B[s] @ V``, for ``s`` up to the first ``M[s] < 0`` (all formed
+    before any is written; ``RW``: as many rows as ``B``, work)."""
+    nr = V.shape[0]
+    m = V.shape[1]
+    n = 0
+    while n < M.shape[0] and M[n] >= 0:
+        n += 1
+    for s in range(n):
+        for c in range(m):
+            RW[s, c] = 0.0
+        for q in range(nr):
+            a = B[s, q]
+            if a != 0.0:
+                for c in range(m):
+                    RW[s, c] += a * V[q, c]
+    for s in range(n):
+        for c in range(m):
+            V[M[s], c] = RW[s, c]

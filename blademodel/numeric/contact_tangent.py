@@ -40,7 +40,7 @@ record shows, differentiated with those decisions fixed.
 
 from __future__ import annotations
 
-from collections import OrderedDict
+from collections import OrderedDict, namedtuple
 
 import numpy as np
 
@@ -101,6 +101,11 @@ COMPILED_CLUSTER_STEPS = True
 COMPILED_CLUSTER_ROWS = 64
 
 
+#: A step's plan for the compiled ``cluster_step`` (:meth:`ContactTangent._cluster_plan`): where each transition
+#: group starts among the step's events, then the arrays that function takes, by its names.
+ClusterPlan = namedtuple("ClusterPlan", "starts gfc gfg goff gmc gmto gmg mlo mn Ab proj PB gyr rk RB RM lfo lrow ltg")
+
+
 def _caches(integrator) -> dict:
     """The kept matrices of ``integrator``'s model and values (its ``flow_digest``)."""
     key = integrator.flow_digest()
@@ -109,7 +114,7 @@ def _caches(integrator) -> dict:
                                    "checked": set(), "projections": _Kept(KEEP_BYTES // 8), "pattern": [],
                                    "ungrouped": set(), "resets": _Kept(KEEP_BYTES // 8),
                                    "powers": _Kept(KEEP_BYTES // 4), "sparse_powers": _Kept(KEEP_BYTES // 4),
-                                   "plans": _Kept(KEEP_BYTES // 8)}
+                                   "plans": _Kept(KEEP_BYTES // 2)}
     _CACHES[key] = c
     while len(_CACHES) > _KEEP:
         _CACHES.popitem(last=False)
@@ -191,6 +196,49 @@ def sparse_stability_matrix_from_powers(powers: tuple, h: float, coefficients: n
     return csr_matrix((data, indices, indptr), shape=(n, n))
 
 
+def _csr_entries(A, rows: np.ndarray):
+    """The entries of a canonical CSR matrix ``A`` in ``rows`` and columns ``rows`` (sorted, distinct): their
+    positions in ``A``'s arrays, rows and columns within ``rows``, in ``A``'s order."""
+    starts = A.indptr[rows]
+    counts = A.indptr[rows + 1] - starts
+    at = np.repeat(starts - (np.cumsum(counts) - counts), counts) + np.arange(int(counts.sum()))
+    where = np.full(A.shape[1], -1, dtype=np.int64)
+    where[rows] = np.arange(rows.size)
+    cols = where[A.indices[at]]
+    inside = cols >= 0
+    return at[inside], np.repeat(np.arange(rows.size), counts)[inside], cols[inside]
+
+
+def csr_block(A, rows: np.ndarray) -> np.ndarray:
+    """The dense block ``A[rows][:, rows]`` of a CSR matrix (``rows`` sorted, distinct), read from its arrays.
+
+    What scipy's fancy indexing gives, without its checks and intermediate matrices (a
+    fifth of its time on a 60-row block of an Iwan ring's ``A``, taken thousands of times a
+    replay). A matrix with duplicate entries is indexed by scipy, which sums them."""
+    if not A.has_canonical_format:
+        return A[rows][:, rows].toarray()
+    at, r, c = _csr_entries(A, rows)
+    out = np.zeros((rows.size, rows.size))
+    out[r, c] = A.data[at]
+    return out
+
+
+def csr_submatrix(A, rows: np.ndarray):
+    """:func:`csr_block`, sparse: ``A[rows][:, rows]`` as a CSR matrix with the same entries in the same order."""
+    from scipy.sparse import csr_matrix
+    if not A.has_canonical_format:
+        return A[rows][:, rows]
+    at, r, c = _csr_entries(A, rows)
+    indptr = np.zeros(rows.size + 1, dtype=A.indptr.dtype)
+    np.cumsum(np.bincount(r, minlength=rows.size), out=indptr[1:])
+    return csr_matrix((A.data[at], c.astype(A.indices.dtype), indptr), shape=(rows.size, rows.size))
+
+
+def continuous_block(M, c: np.ndarray):
+    """``M[c][:, c]``, dense or CSR (:func:`csr_submatrix`)."""
+    return csr_submatrix(M, c) if hasattr(M, "toarray") else M[np.ix_(c, c)]
+
+
 def amplification_powers(A: np.ndarray, degree: int) -> np.ndarray:
     """``A, A^2, ..., A^degree`` of a dense square ``A``, each flattened: a ``(degree, n * n)`` array."""
     n = A.shape[0]
@@ -256,10 +304,12 @@ class ContactTangent:
         self._factored = None   # the contact modes the stick problem in the work arrays is factored for
         self._cluster_sets, self._projections = caches["clusters"], caches["projections"]
         self._resets = caches["resets"]   # labelled laws' reset Jacobians, by contact, guard, mode and labels
+        self._reset_sets: dict = {}   # the resets' rows and columns, by contact and cluster (:meth:`_reset_rows`)
         self._plans = caches["plans"]   # the compiled cluster steps' (:meth:`_cluster_plan`)
         self._cluster_work: dict = {}   # their work arrays, by the cluster's size
-        #: compiled cluster steps taken on the whole model (0) and on the kernel's cluster alone (1)
-        self.cluster_steps = [0, 0]
+        #: compiled cluster steps taken on the whole model (0) and on the kernel's cluster alone (1), and those
+        #: whose recorded labels a transition did not set, stepped in Python (2)
+        self.cluster_steps = [0, 0, 0]
         # the modes' powers of A and of its blocks (the blocks themselves the first), from which R(hA) is assembled
         # at any step
         self._powers_of_A = caches["powers"]
@@ -420,7 +470,7 @@ class ContactTangent:
     def _block_of_A(self, cm, y, rows) -> np.ndarray:
         """``A``'s block on ``rows`` in the mode ``cm``, from the kept ``A`` (built and checked once)."""
         A = self.flow_matrix(cm, y)
-        return A[rows][:, rows].toarray() if hasattr(A, "toarray") else A[np.ix_(rows, rows)]
+        return csr_block(A, rows) if hasattr(A, "toarray") else A[np.ix_(rows, rows)]
 
     def _block(self, cm, y, rows) -> np.ndarray:
         """``A``'s block on ``rows`` in the mode ``cm`` (the first of its kept powers)."""
@@ -436,6 +486,16 @@ class ContactTangent:
                 M = self._R[key] = self._whole_step_matrix(h, cm, y)
             return M
         return stability_matrix_from_powers(self._block_powers(cm, y, rows), h, self._poly)
+
+    def _kept_step_matrix(self, h: float, cm, y):
+        """:meth:`_step_matrix` on the continuous states (the states the replay carries where the laws have labels),
+        kept with it."""
+        key = (h, self._key(cm, y), "continuous")
+        M = self._R.get(key)
+        if M is None:
+            c = self._continuous
+            M = self._R[key] = continuous_block(self._step_matrix(h, cm, y), c)
+        return M
 
     def _whole_step_matrix(self, h: float, cm, y) -> np.ndarray:
         """``R(hA)`` of the mode ``cm``: from its kept powers of ``A`` where ``A`` is dense or (sparse, from
@@ -620,14 +680,17 @@ class ContactTangent:
         raise ContactTangentError(f"the transition of contact {j} at t = {t:.9g} sets other labels than the kernel did")
 
     def _reset_jacobian(self, t, y, cm, j, gi, rows, target=None, y0=None):
-        """``d y+ / d y`` of contact ``j``'s transition by guard ``gi`` at ``y`` and the state after it; ``None`` and
-        ``y`` where the contact's law has no state to reset.
+        """``d y+ / d y`` of contact ``j``'s transition by guard ``gi`` at ``y``, as its rows that differ from the
+        identity's, and the state after it: ``((own, free, cols, block), after)``, or ``None`` and ``y`` where the
+        contact's law has no state to reset (:meth:`_apply_reset` applies it).
 
-        A transition writes its contact's law states only: the Jacobian is the identity
-        but for their rows, central differences of the transition in the cluster's
-        ``rows`` (what those states can depend on), each of step ``1e-6`` of its state and
-        at least ``1e-9`` of the largest physical state at the step's start ``y0`` (``y``
-        itself where None), as the compiled cluster step takes them.
+        A transition writes its contact's law states ``own`` only: the Jacobian is the
+        identity but for their rows, zero but for those of ``free`` (``own`` but the
+        labels) in the columns ``cols`` (the cluster's ``rows`` and ``own``, what those
+        states can depend on, but the labels), which are ``block``: central differences of
+        the transition, each of step ``1e-6`` of its state and at least ``1e-9`` of the
+        largest physical state at the step's start ``y0`` (``y`` itself where None), as the
+        compiled cluster step takes them.
 
         A law with labels (the Iwan elements' modes) decides them from the state, at the guard's root: the
         replay's state there and the kernel's differ by rounding, and a difference step moves the guard across
@@ -649,20 +712,15 @@ class ContactTangent:
             return yy
 
         n = self.n
-        own = self._law_rows(j)
+        own, free, cols = self._reset_rows(j, rows)[:3]
         labels = self._contact_labels[j]
-        cols = np.setdiff1d(np.union1d(rows, own), labels)
-        free = np.setdiff1d(own, labels)
         y0 = y if y0 is None else y0
         steps = 1e-6 * np.maximum(np.abs(y[cols]), 1e-3 * max(float(np.max(np.abs(y0[:n]))), 1e-300))
-        Rj = np.eye(n)
-        Rj[own] = 0.0
         if labels.size:
             y = self._past_root(t, y, cm, j, gi, K)
         after = fire(y)
         if not labels.size:
-            Rj[np.ix_(free, cols)] = self._columns(lambda z: fire(z)[free], y, cols, steps)
-            return Rj, after
+            return (j, free, cols, self._columns(lambda z: fire(z)[free], y, cols, steps)), after
         if target is None:
             target = after[labels].copy()
         target = np.asarray(target, dtype=float)
@@ -682,8 +740,36 @@ class ContactTangent:
             for c, (i, e) in enumerate(zip(cols, steps)):
                 block[:, c] = self._decided_column(fire, y, after[free], i, e, labels, target, free, j, t)
             self._resets[key] = block
-        Rj[np.ix_(free, cols)] = block
-        return Rj, after
+        return (j, free, cols, block), after
+
+    def _reset_rows(self, j: int, rows) -> tuple:
+        """Contact ``j``'s law states ``own``, ``free`` (``own`` but its labels), the reset's columns ``cols``
+        (:meth:`_reset_jacobian`) and, for :meth:`_apply_reset` on the cluster's ``rows``: the positions in ``rows``
+        of ``own``, of ``free`` and of ``cols``, and which of ``free`` and ``cols`` are among ``rows`` (kept by
+        contact and rows)."""
+        key = (int(j), rows.tobytes())
+        found = self._reset_sets.get(key)
+        if found is None:
+            own = self._law_rows(j)
+            labels = self._contact_labels[j]
+            cols = np.setdiff1d(np.union1d(rows, own), labels)
+            free = np.setdiff1d(own, labels)
+            in_f, in_c = np.isin(free, rows), np.isin(cols, rows)
+            found = self._reset_sets[key] = (own, free, cols, np.searchsorted(rows, own[np.isin(own, rows)]),
+                                             np.searchsorted(rows, free[in_f]), np.searchsorted(rows, cols[in_c]),
+                                             np.flatnonzero(in_f), np.flatnonzero(in_c))
+        return found
+
+    def _apply_reset(self, V, rows, reset) -> np.ndarray:
+        """``V`` (on the sorted ``rows``) after the reset ``reset`` (:meth:`_reset_jacobian`'s): the rows of its law
+        states that are among ``rows`` become the block's product with ``V``'s rows of its columns (zero for the
+        labels, held), the others unchanged. ``V`` is overwritten."""
+        j, free, cols, block = reset
+        own_at, free_at, cols_at, f, c = self._reset_rows(j, rows)[3:]
+        new = block[np.ix_(f, c)] @ V[cols_at]
+        V[own_at] = 0.0
+        V[free_at] = new
+        return V
 
     @staticmethod
     def _decided_column(fire, y, base, i, e, labels, target, free, j, t) -> np.ndarray:
@@ -803,7 +889,7 @@ class ContactTangent:
         c, loc = (self._continuous, self._local) if self._labels.size else (None, np.arange(n))
 
         def kept(M):   # a matrix of the whole state on the states V carries
-            return M if c is None else M[np.ix_(c, c)]
+            return M if c is None else continuous_block(M, c)
 
         V = np.eye(n if c is None else c.size)
         ie = 0
@@ -847,7 +933,7 @@ class ContactTangent:
             if not np.array_equal(cmx, rec_cm[k + 1]):
                 raise ContactTangentError(f"the event log disagrees with the record at t = {t1:.9g}")
             seeds = tuple(sorted({int(lc[i]) for i in order}))
-            Vn = kept(self._step_matrix(H, cm0, rec_y[k])) @ V
+            Vn = (self._step_matrix(H, cm0, rec_y[k]) if c is None else self._kept_step_matrix(H, cm0, rec_y[k])) @ V
             for rows, contacts in self._clusters(modes, seeds, rec_y[k]):
                 events = [i for i in order if int(lc[i]) in contacts]
                 Vn[loc[rows]] = self._step_cluster(V[loc[rows]], rows, contacts, events, log, t0, t1, rec_y[k], cm0,
@@ -888,19 +974,24 @@ class ContactTangent:
                                             range(self.nc))
         return D
 
-    def _through_transitions(self, V, t, y, cm, group, rows, contacts, targets=None, y0=None):
+    def _through_transitions(self, V, t, y, cm, group, rows, contacts, targets=None, y0=None, record=None):
         """``V`` (on ``rows``) taken through the transitions ``group`` at ``(t, y)`` from the modes ``cm``: each
         ``(contact, guard, to)``'s reset (``guard`` ``-1``: a mode the friction problem set, no reset), then the
         stick projection of ``contacts`` where one of them starts to stick. Returns ``(V, y, modes)`` after them.
         ``targets``: by contact, its labels after its transitions as the kernel set them, where known; ``y0``: the
-        step's start state (:meth:`_reset_jacobian`)."""
+        step's start state (:meth:`_reset_jacobian`); ``record``: :meth:`_cluster_step`'s."""
         cm2 = cm.copy()
+        copied = False
         for j, gi, to in group:
             if gi >= 0:
                 target = None if targets is None else targets.get(j)
-                Rj, y = self._reset_jacobian(t, y, cm2, j, gi, rows, target, y0)
-                if Rj is not None:
-                    V = Rj[np.ix_(rows, rows)] @ V
+                reset, y = self._reset_jacobian(t, y, cm2, j, gi, rows, target, y0)
+                if reset is not None:
+                    if not copied:
+                        V, copied = V.copy(), True
+                    V = self._apply_reset(V, rows, reset)
+                    if record is not None:
+                        record["resets"].append((j, reset, y[self._contact_labels[j]].copy()))
             cm2[j] = to
         if any(self._rigid_stick(j, cm2[j]) and not self._rigid_stick(j, cm[j]) for j in contacts):
             stick = [j for j in contacts if self._rigid_stick(j, cm2[j])]
@@ -908,24 +999,41 @@ class ContactTangent:
         return V, y, cm2
 
     def _step_cluster(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1):
-        """:meth:`_cluster_step`, compiled (:meth:`_compiled_cluster_step`) where the laws have no labels and the
-        cluster has at most :data:`COMPILED_CLUSTER_ROWS` rows."""
-        if COMPILED_CLUSTER_STEPS and not self._labels.size and rows.size <= COMPILED_CLUSTER_ROWS:
-            return self._compiled_cluster_step(Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H)
+        """:meth:`_cluster_step`, compiled (:meth:`_compiled_cluster_step`) where the cluster has at most
+        :data:`COMPILED_CLUSTER_ROWS` rows."""
+        if COMPILED_CLUSTER_STEPS and rows.size <= COMPILED_CLUSTER_ROWS:
+            return self._compiled_cluster_step(Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1)
         return self._cluster_step(Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1)
 
-    def _compiled_cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H):
+    def _compiled_cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1):
         """:meth:`_cluster_step` by the compiled ``cluster_step``, from the step's plan (:meth:`_cluster_plan`): the
-        step's matrix on the cluster's rows (the sequence applied to the identity), then its product with ``Vc``."""
+        step's matrix on the cluster's rows (the sequence applied to the identity), then its product with ``Vc``.
+
+        Where the laws have labels (Iwan), the plan is also keyed by the labels at the step's
+        start and end, and recorded from the Python step run once on no columns (what it
+        decides: its blocks of ``A``, the labels each transition set and their resets'
+        Jacobians, kept for those labels); the compiled step follows, from the first time on,
+        so a step's result does not depend on whether its plan was kept. A step whose
+        transitions do not set the recorded labels (``cluster_step``'s status 2) is stepped in
+        Python (``cluster_steps[2]`` counts them)."""
         lt, lc, lg, lf, lto = log
         ev = np.asarray(events, dtype=np.int64)
         times = lt[ev]
         key = (rows.tobytes(), cm0.tobytes(), lc[ev].tobytes(), lg[ev].tobytes(), lto[ev].tobytes(),
                np.diff(times).astype(bool).tobytes())   # (which events share a time: the groups)
+        labelled = bool(self._labels.size)
+        if labelled:
+            key += (np.rint(y0[self._labels]).astype(np.int8).tobytes(),
+                    np.rint(y1[self._labels]).astype(np.int8).tobytes())
         plan = self._plans.get(key)
         if plan is None:
-            plan = self._plans[key] = self._cluster_plan(rows, in_cluster, events, log, cm0, y0)
-        gtime, first = times[plan[0]], plan[1:]
+            record = None
+            if labelled:   # the Python step on no columns: what it decides, not what it multiplies
+                record = {"A": [], "resets": []}
+                self._cluster_step(np.empty((rows.size, 0)), rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1,
+                                   record)
+            plan = self._plans[key] = self._cluster_plan(rows, in_cluster, events, log, cm0, y0, record)
+        gtime, first = times[plan.starts], plan[1:]
         nr = rows.size
         work = self._cluster_work.get(nr)
         if work is None:
@@ -940,22 +1048,30 @@ class ContactTangent:
         X0.flat[::nr + 1] = 1.0
         ig = self.ig
         status = self.mod.cluster_step(X0, X1, C, rows, float(t0), float(t1), y0, cm0.copy(), float(H), gtime.size,
-                                       gtime, *first, self._poly, self.n, *self._tableau, ig.I, ig.R, ig.WI, ig.WF,
-                                       self._G, *self._work, end, ya, Pt, Ph, dta, dtb, Rb, Rb2, steps, cols, Y2, D,
-                                       RW, info)
+                                       gtime, *first, ig.period / ig.steps_per_period, self._poly, self.n,
+                                       *self._tableau, ig.I, ig.R, ig.WI, ig.WF, self._G, *self._work, end, ya, Pt, Ph,
+                                       dta, dtb, Rb, Rb2, steps, cols, Y2, D, RW, info)
         self._factored = None   # the compiled step factored other modes in the work arrays
+        if status == 2:   # a recorded transition decided other labels: the Python step decides them
+            self.cluster_steps[2] += 1
+            return self._cluster_step(Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1)
         self.cluster_steps[int(info[1])] += 1
         if status:
             raise ContactTangentError(f"a grazing event at t = {info[0]:.9g} (its guard has no rate)")
         return C @ Vc   # the step is linear in the block: its matrix, then one product
 
-    def _cluster_plan(self, rows, in_cluster, events, log, cm0, y0) -> tuple:
+    def _cluster_plan(self, rows, in_cluster, events, log, cm0, y0, record=None) -> tuple:
         """What the compiled ``cluster_step`` takes of a step's cluster besides its times and states: where each
         transition group starts among ``events`` (by time) and, as that function names them, ``gfc, gfg, goff,
-        gmc, gmto, gmg, mlo, mn, Ab, proj, PB, gyr``: the groups' fired guards and transitions (each one's contact,
-        mode, guard and the law states it resets), each sub-step's block of ``A``, the stick projections and the
-        fired guards' kept gradients. It depends on the modes, the rows and the transitions only, so it is
-        kept with the model's matrices."""
+        gmc, gmto, gmg, mlo, mn, Ab, proj, PB, gyr, rk, RB, RM, lfo, lrow, ltg``: the groups' fired guards and
+        transitions (each one's contact, mode, guard and the law states it resets), each sub-step's block of ``A``,
+        the stick projections, the fired guards' kept gradients and the recorded transitions of laws with labels.
+        It depends on the modes, the rows and the transitions only (and the labels, where there are any), so it
+        is kept with the model's matrices.
+
+        ``record``: where the laws have labels, the Python step's record of this step
+        (:meth:`_cluster_step`): the blocks of ``A`` it stepped with and, for each reset, the
+        contact, its Jacobian (:meth:`_reset_jacobian`) and the labels it set."""
         lt, lc, lg, lf, lto = log
         groups, starts = [], []   # [(contact, guard, to), ...] by time, and each one's first event
         for q, i in enumerate(events):
@@ -969,43 +1085,74 @@ class ContactTangent:
         gfc = np.full(ng, -1, dtype=np.int64)
         gfg = np.zeros(ng, dtype=np.int64)
         goff = np.zeros(ng + 1, dtype=np.int64)
-        gmc, gmto, gmg, mlo, mn = [], [], [], [], []
+        gmc, gmto, gmg, mlo, mn, rk = [], [], [], [], [], []
         proj = np.zeros(ng, dtype=np.int64)
-        PB = np.zeros((ng, nr, nr))
+        PB, RB, RM, lfo, lrow, ltg = [], [], [], [0], [], []
+        resets = iter(record["resets"]) if record is not None else None
         cm = cm0.copy()
         for g, group in enumerate(groups):
-            Ab[g] = self._block_of_A(cm, y0, rows)   # (the compiled step builds R(hA) by Horner's rule)
+            # (the compiled step builds R(hA) by Horner's rule from A's block)
+            Ab[g] = record["A"][g] if record is not None else self._block_of_A(cm, y0, rows)
             fired = next(((j, gi) for j, gi, _ in group if gi >= 0), None)
             if fired is not None:
                 gfc[g], gfg[g] = fired
-                key = (cm.tobytes(), *fired)
-                gy = self._gy.get(key)
-                if gy is None:
-                    self._gy[key] = gy = self._guard_gradient_at_zero(cm, *fired)
-                gyr[g] = gy[rows]
+                if self._contact_labels[fired[0]].size:
+                    gyr[g] = np.nan   # differences at the event (:meth:`_guard_gradient`)
+                else:
+                    key = (cm.tobytes(), *fired)
+                    gy = self._gy.get(key)
+                    if gy is None:
+                        self._gy[key] = gy = self._guard_gradient_at_zero(cm, *fired)
+                    gyr[g] = gy[rows]
             after = cm.copy()
             for j, gi, to in group:
                 after[j] = to
                 gmc.append(j)
                 gmto.append(to)
                 gmg.append(gi)
-                resets = gi >= 0 and not self._stateless[j]
+                resets_states = gi >= 0 and not self._stateless[j]
                 own = self._law_rows(j)
-                mlo.append(int(own[0]) if resets else 0)
-                mn.append(own.size if resets else 0)
+                mlo.append(int(own[0]) if resets_states else 0)
+                mn.append(own.size if resets_states else 0)
+                rk.append(0)
+                if resets_states and resets is not None:
+                    jr, reset, labels_set = next(resets)
+                    if jr != j:
+                        raise ContactTangentError("the Python step's record disagrees with the step's transitions")
+                    if self._contact_labels[j].size:
+                        # the reset's rows among the cluster's (its labels' zero), padded to the most law states
+                        own_at, free_at, cols_at, f, c = self._reset_rows(j, rows)[3:]
+                        B, M = np.zeros((self._most_states, nr)), np.full(self._most_states, -1, dtype=np.int64)
+                        M[:own_at.size] = own_at
+                        B[np.ix_(np.searchsorted(own_at, free_at), cols_at)] = reset[3][np.ix_(f, c)]
+                        RB.append(B)
+                        RM.append(M)
+                        rk[-1] = len(RB)
+                        lrow.extend(self._contact_labels[j].tolist())
+                        ltg.extend(labels_set.tolist())
+                lfo.append(len(lrow))
             goff[g + 1] = len(gmc)
             if any(self._rigid_stick(j, after[j]) and not self._rigid_stick(j, cm[j]) for j in in_cluster):
-                proj[g] = 1
-                PB[g] = self._projection_block([j for j in in_cluster if self._rigid_stick(j, after[j])], rows)
+                PB.append(self._projection_block([j for j in in_cluster if self._rigid_stick(j, after[j])], rows))
+                proj[g] = len(PB)
             cm = after
-        Ab[ng] = self._block_of_A(cm, y0, rows)
+        Ab[ng] = record["A"][ng] if record is not None else self._block_of_A(cm, y0, rows)
         members = (np.array(x, dtype=np.int64) for x in (gmc, gmto, gmg, mlo, mn))
-        return (np.array(starts, dtype=np.int64), gfc, gfg, goff, *members, Ab, proj, PB, gyr)
 
-    def _cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1=None):
+        def stack(blocks, shape, dtype=float):
+            return np.array(blocks, dtype=dtype) if blocks else np.zeros((0,) + shape, dtype=dtype)
+
+        return ClusterPlan(np.array(starts, dtype=np.int64), gfc, gfg, goff, *members, Ab, proj, stack(PB, (nr, nr)),
+                           gyr, np.array(rk, dtype=np.int64), stack(RB, (self._most_states, nr)),
+                           stack(RM, (self._most_states,), np.int64), np.array(lfo, dtype=np.int64),
+                           np.array(lrow, dtype=np.int64), np.array(ltg, dtype=float))
+
+    def _cluster_step(self, Vc, rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1=None, record=None):
         """The rows ``rows`` of a step's tangent through the cluster's ``events`` (log indices, in time order);
         ``in_cluster``: the contacts whose coordinates are in ``rows``. ``y1``: the kernel's state at the step's end,
-        whose labels are those each contact's last transition in the step set."""
+        whose labels are those each contact's last transition in the step set. ``record``: None, or a dict whose
+        lists ``"A"`` and ``"resets"`` get each sub-step's block of ``A`` and each reset's ``(contact, Jacobian,
+        labels set)`` (:meth:`_cluster_plan`)."""
         lt, lc, lg, lf, lto = log
         last = {}
         if y1 is not None and self._labels.size:
@@ -1022,6 +1169,8 @@ class ContactTangent:
                 i = events[q]
                 group.append((int(lc[i]), int(lg[i]), int(lto[i])))
                 q += 1
+            if record is not None:
+                record["A"].append(self._block(cm, ya, rows))
             ye, Pt, Ph = self._substep_derivatives(ta, ya, te - ta, cm, H, rows)
             W = self._step_matrix(te - ta, cm, ya, rows) @ Vc + np.outer(Pt - Ph, dta)
             fired = next(((j, gi) for j, gi, _ in group if gi >= 0), None)
@@ -1036,7 +1185,9 @@ class ContactTangent:
             targets = {j: y1[self._contact_labels[j]] for j, _, _ in group
                        if j in last and last[j] == te and self._contact_labels[j].size}
             Vc, ye, cm2 = self._through_transitions(W + np.outer(Ph, dtb), te, ye, cm, group, rows, in_cluster,
-                                                    targets, y0)
+                                                    targets, y0, record)
             ta, ya, cm, dta = te, ye, cm2, dtb
+        if record is not None:
+            record["A"].append(self._block(cm, ya, rows))
         _, Pt, Ph = self._substep_derivatives(ta, ya, t1 - ta, cm, H, rows)
         return self._step_matrix(t1 - ta, cm, ya, rows) @ Vc + np.outer(Pt - Ph, dta)
