@@ -390,21 +390,28 @@ def test_the_iwan_ring_s_tangent_holds_the_labels_the_kernel_set():
 
 def test_the_iwan_ring_s_compiled_cluster_step_is_the_python_one(monkeypatch):
     """On the preloaded 4-blade Iwan ring (labels, resets decided from the state, one-sided differences), the
-    compiled cluster steps follow plans recorded from the Python step (its blocks of ``A``, the labels each
-    transition set and the resets' Jacobians for them) and give the Python steps' monodromy to rounding, from the
-    first replay on: a second replay records nothing and is the first to the bit. The compiled step uses the
-    recorded resets (dropped, the monodromy changes) and checks the labels: a plan whose recorded labels a
-    transition does not set is stepped in Python, with the Python steps' monodromy."""
+    compiled cluster steps follow plans of the Python step's decisions (its blocks of ``A``, the labels each
+    transition set and the resets' Jacobians for them: recorded from it, or from the kept matrices where they
+    hold them all) and give the Python steps' monodromy to rounding, from the first replay on: a second replay
+    records nothing and is the first to the bit. The compiled step uses the recorded resets (dropped, the
+    monodromy changes) and checks the labels: a plan whose recorded labels a transition does not set is stepped
+    in Python, with the Python steps' monodromy."""
     from blademodel.numeric import contact_tangent
     ig, orbit = _iwan_ring_orbit()
-    recorded = []
-    python_step = contact_tangent.ContactTangent._cluster_step
+    recorded, from_kept = [], []
+    python_step, kept_record = contact_tangent.ContactTangent._cluster_step, contact_tangent.ContactTangent._kept_record
 
     def counted(self, Vc, *a, **k):
         recorded.append(Vc.shape[1] == 0)
         return python_step(self, Vc, *a, **k)
 
+    def kept(self, *a):
+        record = kept_record(self, *a)
+        from_kept.append(record is not None)
+        return record
+
     monkeypatch.setattr(contact_tangent.ContactTangent, "_cluster_step", counted)
+    monkeypatch.setattr(contact_tangent.ContactTangent, "_kept_record", kept)
 
     def replay(compiled_steps, clear=True):
         monkeypatch.setattr(contact_tangent, "COMPILED_CLUSTER_STEPS", compiled_steps)
@@ -418,12 +425,15 @@ def test_the_iwan_ring_s_compiled_cluster_step_is_the_python_one(monkeypatch):
     assert steps >= 20 and not any(recorded)
     recorded.clear()
     first, tangent = replay(True)
-    assert len(recorded) == steps and all(recorded)   # each step's plan recorded on no columns, once
+    # each step's plan made once: from the kept matrices, or recorded from the Python step on no columns
+    assert len(from_kept) == steps and all(recorded) and len(recorded) == from_kept.count(False)
+    assert sum(from_kept) >= 10 and len(recorded) >= 10
     assert sum(tangent.cluster_steps[:2]) == steps and tangent.cluster_steps[2] == 0
     assert scaled_error(first, reference, orbit.scale) < 1e-12
     recorded.clear()
+    from_kept.clear()
     second, tangent = replay(True, clear=False)
-    assert not recorded and sum(tangent.cluster_steps[:2]) == steps
+    assert not recorded and not from_kept and sum(tangent.cluster_steps[:2]) == steps
     np.testing.assert_array_equal(second, first)
 
     plans = next(iter(contact_tangent._CACHES.values()))["plans"]

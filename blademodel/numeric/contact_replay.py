@@ -187,13 +187,14 @@ def cluster_step(X0, X1, out, rows, t0, t1, y0, cm, H, ng, gtime, gfc, gfg, goff
     sets the labels ``lrow[lfo[q]:lfo[q + 1]]`` to the recorded ``ltg[...]``
     (:func:`decided_transition`), and the block's rows ``RM[rk[q] - 1, s]`` (its law states'
     among ``rows``, up to the first ``-1``) become ``RB[rk[q] - 1, s]`` times the block (the
-    reset's Jacobian for these labels, affine, as ``ContactTangent._reset_jacobian`` took it). Where no try sets them, 2 and the time in
-    ``info[0]``: the caller steps the cluster in Python. ``Ab[g]``: ``A``'s block on
-    ``rows`` in the modes of the sub-step before group ``g`` (``Ab[ng]``: after the last).
-    ``poly``: the method's stability polynomial, lowest power first (``R(hA)`` on the block
-    by Horner's rule). The rest are work arrays: the sub-step's
-    (:func:`substep_derivatives`), ``ya`` and ``Y2`` (a full state each), ``dta, dtb`` (a
-    row of the block each), ``Rb, Rb2`` (a block of ``A``'s each), ``steps, cols`` (a row's
+    reset's Jacobian for these labels, affine, as ``ContactTangent._reset_jacobian`` took
+    it). Where no try sets them, 2 and the time in ``info[0]``: the caller steps the cluster
+    in Python. ``Ab[g]``: ``A``'s block on ``rows`` in the modes of the sub-step before
+    group ``g`` (``Ab[ng]``: after the last). ``poly``: the method's stability polynomial,
+    lowest power first (``R(hA)`` on the block by Horner's rule). The rest are work arrays:
+    the sub-step's (:func:`substep_derivatives`), ``ya`` and ``Y2`` (a full state each),
+    ``dta, dtb`` (a row of the block each), ``Rb, Rb2`` (a block of ``A``'s each),
+    ``steps, cols`` (a row's
     length each), ``D`` and ``RW`` (the most law states by a row's length and by a row of
     the block).
     """

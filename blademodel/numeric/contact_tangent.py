@@ -1010,10 +1010,11 @@ class ContactTangent:
         step's matrix on the cluster's rows (the sequence applied to the identity), then its product with ``Vc``.
 
         Where the laws have labels (Iwan), the plan is also keyed by the labels at the step's
-        start and end, and recorded from the Python step run once on no columns (what it
-        decides: its blocks of ``A``, the labels each transition set and their resets'
-        Jacobians, kept for those labels); the compiled step follows, from the first time on,
-        so a step's result does not depend on whether its plan was kept. A step whose
+        start and end, and made of the kept matrices where they hold it all
+        (:meth:`_kept_record`), else recorded from the Python step run once on no columns
+        (what it decides: its blocks of ``A``, the labels each transition set and their
+        resets' Jacobians, kept for those labels); the compiled step follows, from the first
+        time on, so a step's result does not depend on whether its plan was kept. A step whose
         transitions do not set the recorded labels (``cluster_step``'s status 2) is stepped in
         Python (``cluster_steps[2]`` counts them)."""
         lt, lc, lg, lf, lto = log
@@ -1028,10 +1029,12 @@ class ContactTangent:
         plan = self._plans.get(key)
         if plan is None:
             record = None
-            if labelled:   # the Python step on no columns: what it decides, not what it multiplies
-                record = {"A": [], "resets": []}
-                self._cluster_step(np.empty((rows.size, 0)), rows, in_cluster, events, log, t0, t1, y0, cm0, H, y1,
-                                   record)
+            if labelled:
+                record = self._kept_record(events, log, cm0, y0, y1, rows)
+                if record is None:   # the Python step on no columns: what it decides, not what it multiplies
+                    record = {"A": [], "resets": []}
+                    self._cluster_step(np.empty((rows.size, 0)), rows, in_cluster, events, log, t0, t1, y0, cm0, H,
+                                       y1, record)
             plan = self._plans[key] = self._cluster_plan(rows, in_cluster, events, log, cm0, y0, record)
         gtime, first = times[plan.starts], plan[1:]
         nr = rows.size
@@ -1059,6 +1062,52 @@ class ContactTangent:
         if status:
             raise ContactTangentError(f"a grazing event at t = {info[0]:.9g} (its guard has no rate)")
         return C @ Vc   # the step is linear in the block: its matrix, then one product
+
+    def _kept_record(self, events, log, cm0, y0, y1, rows):
+        """What the Python step would record of a step of a model with labels (:meth:`_cluster_step`), without
+        stepping: None where a reset's Jacobian is not kept (it is taken at the event's state), or where a contact
+        with labels resets more than once in the step (the labels between its resets are known to no record).
+
+        Each contact's labels are ``y0``'s until its reset and ``y1``'s after it (the kernel's
+        end state: the labels it set), and its resets' Jacobians are kept by those
+        (:meth:`_reset_jacobian`), as the modes' ``A`` are by mode and labels (built where
+        not kept, and checked at ``y0`` with those labels: the flow is affine in a mode for
+        given labels, wherever it is checked)."""
+        lt, lc, lg, lf, lto = log
+        resetting = [int(lc[i]) for i in events if lg[i] >= 0 and not self._stateless[int(lc[i])]]
+        if any(resetting.count(j) > 1 for j in resetting if self._contact_labels[j].size):
+            return None
+        y = y0.copy()   # (its labels only are read: the matrices' keys)
+        cm = cm0.copy()
+        record = {"A": [], "resets": []}
+
+        def block():   # (y: the step's start state with the labels of this sub-step, where A is checked)
+            return self._block_of_A(cm, y, rows)
+
+        q = 0
+        while q < len(events):
+            te = lt[events[q]]
+            record["A"].append(block())
+            while q < len(events) and lt[events[q]] == te:
+                i = events[q]
+                j, gi = int(lc[i]), int(lg[i])
+                if gi >= 0 and not self._stateless[j]:
+                    labels = self._contact_labels[j]
+                    reset = None
+                    if labels.size:
+                        free, cols = self._reset_rows(j, rows)[1:3]
+                        target = y1[labels]
+                        reset = self._resets.get((j, gi, int(cm[j]), np.rint(y[labels]).astype(np.int8).tobytes(),
+                                                  target.astype(np.int8).tobytes(), cols.tobytes()))
+                        if reset is None:
+                            return None
+                        reset = (j, free, cols, reset)
+                        y[labels] = target
+                    record["resets"].append((j, reset, y[labels].copy()))
+                cm[j] = int(lto[i])
+                q += 1
+        record["A"].append(block())
+        return record
 
     def _cluster_plan(self, rows, in_cluster, events, log, cm0, y0, record=None) -> tuple:
         """What the compiled ``cluster_step`` takes of a step's cluster besides its times and states: where each

@@ -29,7 +29,9 @@ class Kept:
     """Values by key, the least recently used dropped once they hold more than ``budget`` bytes.
 
     What is kept here is computed from the model's values alone, so a dropped value is
-    computed again bit for bit the same: the budget moves the cost, never a result.
+    computed again bit for bit the same: the budget moves the cost, never a result. (One
+    exception: the Iwan law's reset Jacobians, and the cluster steps' plans that hold them,
+    are differences at the state where they were first needed, the same to their rounding.)
     Safe between threads (the grazing locator's thread replays on the same model's kept
     matrices as the continuation's): a lookup and its move to the end, an insertion and
     the drops it makes, each happen whole.
