@@ -26,7 +26,10 @@ affine only piecewise) it is central differences at the event's state
 ``cluster_step`` takes a cluster's whole step through its events in one call: the
 sub-steps, the event times' rows, the resets' central differences and the stick
 projections, applied to the identity on the cluster's rows (the step is linear in the
-tangent), on the kernel's own cluster of those events as the active set.
+tangent), on the kernel's own cluster of those events as the active set. A law with
+labels (Iwan) decides them from the state: its resets follow a plan recorded from the
+Python step (the labels each sets, their Jacobian for those labels), and the step checks
+that its transitions set those labels (``decided_transition``).
 """
 
 import math  # noqa: F401

@@ -681,7 +681,7 @@ class ContactTangent:
 
     def _reset_jacobian(self, t, y, cm, j, gi, rows, target=None, y0=None):
         """``d y+ / d y`` of contact ``j``'s transition by guard ``gi`` at ``y``, as its rows that differ from the
-        identity's, and the state after it: ``((own, free, cols, block), after)``, or ``None`` and ``y`` where the
+        identity's, and the state after it: ``((j, free, cols, block), after)``, or ``None`` and ``y`` where the
         contact's law has no state to reset (:meth:`_apply_reset` applies it).
 
         A transition writes its contact's law states ``own`` only: the Jacobian is the
