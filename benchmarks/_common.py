@@ -8,6 +8,7 @@ absolute time is meaningful. Results go to ``docs/benchmarks/<name>.json``.
 
 from __future__ import annotations
 
+import argparse
 import atexit
 import ctypes
 import json
@@ -57,6 +58,16 @@ def write_json(name: str, data: dict) -> Path:
     path = OUT / f"{name}.json"
     path.write_text(json.dumps(data, indent=1, default=_default) + "\n")
     return path
+
+
+def start(doc: str) -> tuple:
+    """A benchmark's command line (``--repeats``, default 2; its description the first line of ``doc``) and its
+    start: the machine's load printed, ``(args, time.time())``."""
+    ap = argparse.ArgumentParser(description=doc.split("\n")[0])
+    ap.add_argument("--repeats", type=int, default=2)
+    args = ap.parse_args()
+    print_load("at start")
+    return args, time.time()
 
 
 def ring_continuation(overrides: dict, opts: dict):

@@ -34,9 +34,7 @@ values and leading multipliers' moduli) to ``1e-7``.
 
 from __future__ import annotations
 
-import argparse
 import sys
-import time
 
 import numpy as np
 
@@ -102,11 +100,7 @@ def replay_rows(repeats: int) -> list:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--repeats", type=int, default=2)
-    args = ap.parse_args()
-    C.print_load("at start")
-    t0 = time.time()
+    args, t0 = C.start(__doc__)
     rows = replay_rows(args.repeats)
     for name, (overrides, opts) in CASES.items():
         C.ring_continuation(overrides, {**opts, "max_points": 2})   # compile (or load) the kernel before timing

@@ -25,9 +25,7 @@ another order, and the corrections, converged to ``1e-10``, take other paths fro
 
 from __future__ import annotations
 
-import argparse
 import sys
-import time
 
 import numpy as np
 
@@ -64,11 +62,7 @@ def now(way: str) -> None:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--repeats", type=int, default=2)
-    args = ap.parse_args()
-    C.print_load("at start")
-    t0 = time.time()
+    args, t0 = C.start(__doc__)
     rows = []
     for name, (overrides, opts) in CASES.items():
         C.ring_continuation(overrides, {**opts, "max_points": 2})   # compile (or load) the kernel before timing

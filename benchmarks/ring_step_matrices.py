@@ -23,9 +23,7 @@ and the corrections, converged to a residual of ``1e-10``, take other paths from
 
 from __future__ import annotations
 
-import argparse
 import sys
-import time
 
 import numpy as np
 
@@ -64,11 +62,7 @@ def same(a, b) -> float:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--repeats", type=int, default=2)
-    args = ap.parse_args()
-    C.print_load("at start")
-    t0 = time.time()
+    args, t0 = C.start(__doc__)
     rows = []
     for name, (overrides, opts) in CASES.items():
         run(overrides, {**opts, "stop": opts["start"] + 0.5})   # compile (or load) the kernels before timing

@@ -229,6 +229,26 @@ def test_a_closed_ring_that_sticks_is_differentiated_through_its_singular_stick_
     assert scaled_error(s.monodromy, ref, orbit.scale) < 1e-6
 
 
+def test_a_csr_block_is_scipy_s_fancy_indexing():
+    """``csr_block`` and ``csr_submatrix`` read ``A[rows][:, rows]`` from a CSR matrix's arrays: the same entries as
+    scipy's fancy indexing, dense or in the same CSR arrays (so products with them round alike); a matrix with
+    duplicate entries is summed, as scipy does."""
+    from scipy.sparse import csr_matrix, random as sparse_random
+    from blademodel.numeric.contact_tangent import csr_block, csr_submatrix
+    rng = np.random.default_rng(3)
+    for n in (5, 60, 288):
+        A = sparse_random(n, n, density=0.1, random_state=n, format="csr")
+        for _ in range(10):
+            rows = np.sort(rng.choice(n, size=int(rng.integers(1, n + 1)), replace=False))
+            ref = A[rows][:, rows]
+            np.testing.assert_array_equal(csr_block(A, rows), ref.toarray())
+            sub = csr_submatrix(A, rows)
+            for part in ("indptr", "indices", "data"):
+                np.testing.assert_array_equal(getattr(sub, part), getattr(ref, part))
+    twice = csr_matrix((np.array([1.0, 2.0, 4.0]), np.array([1, 1, 0]), np.array([0, 2, 3])), shape=(2, 2))
+    np.testing.assert_array_equal(csr_block(twice, np.arange(2)), [[0.0, 3.0], [4.0, 0.0]])
+
+
 @pytest.mark.parametrize("case", ["mistuned", "closed", "bilinear"])
 def test_the_compiled_cluster_step_is_the_python_one(monkeypatch, case):
     """The replay stepping each cluster through its events in compiled code (``cluster_step``) gives the

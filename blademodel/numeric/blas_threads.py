@@ -7,8 +7,8 @@ another. Measured on the 2-CPU machine with numpy's OpenBLAS: a 96 x 96 product 
 gain a little, for twice the CPU). :func:`blas_threads_for` limits BLAS to one thread
 up to :data:`ONE_THREAD_STATES` and leaves it alone above.
 
-Whole continuations (``blademodel continue``, one run each way, one after the other, on
-the idle machine; the grazing locator's thread works beside the continuation's):
+Whole continuations (``blademodel continue``, two runs each way, one after the other, on
+the idle machine, the second quoted; the grazing locator's thread works beside the continuation's):
 a mistuned 48-blade ring (192 states) 22.3 s wall and 25.2 s of CPU in one BLAS thread
 against 22.0 s and 42.5 s in two; the README's preloaded 24-blade Iwan ring (288) 32.3 s
 and 45.1 s against 41.1 s and 75.9 s; the README's 96-blade ring on ``T / 8`` (384)

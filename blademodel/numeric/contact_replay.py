@@ -333,16 +333,7 @@ def through_groups(X0, X1, out, rows, t0, t1, y0, cm, ng, gtime, gfc, gfg, goff,
             cm[gmc[q]] = gmto[q]
         cur = 1 - cur   # the block is in dst now
         if proj[g] != 0:
-            other = src   # free: the block is in dst
-            P = PB[proj[g] - 1]
-            for r in range(nr):
-                for c in range(m):
-                    other[r, c] = 0.0
-                for q in range(nr):
-                    a = P[r, q]
-                    if a != 0.0:
-                        for c in range(m):
-                            other[r, c] += a * dst[q, c]
+            rows_times(PB[proj[g] - 1], nr, dst, src)   # (src is free: the block is in dst)
             cur = 1 - cur
         start = te
         for k in range(ns):
@@ -380,14 +371,7 @@ def reset_rows(t, y, y0, cm, j, gi, lo, nst, rows, nphys, V, I, R, WI, WF, G, Y2
         apply_transition(t, Y2, cm, j, gi, I, R, WI, WF, G)  # noqa: F821
         for s in range(nst):
             D[s, rc] = (D[s, rc] - Y2[lo + s]) / (2.0 * e)
-    for s in range(nst):
-        for c in range(m):
-            RW[s, c] = 0.0
-        for rc in range(nr):
-            a = D[s, rc]
-            if a != 0.0:
-                for c in range(m):
-                    RW[s, c] += a * V[rc, c]
+    rows_times(D, nst, V, RW)
     for r in range(nr):
         if lo <= rows[r] < lo + nst:
             for c in range(m):
@@ -461,19 +445,22 @@ def decided_transition(t, y, cm, j, gi, lrow, ltg, hs, I, R, WI, WF, G, Y2, F, Y
 def replace_rows(V, B, M, RW):
     """The rows ``M[s]`` of ``V`` replaced by ``B[s] @ V``, for ``s`` up to the first ``M[s] < 0`` (all formed
     before any is written; ``RW``: as many rows as ``B``, work)."""
-    nr = V.shape[0]
-    m = V.shape[1]
     n = 0
     while n < M.shape[0] and M[n] >= 0:
         n += 1
+    rows_times(B, n, V, RW)
     for s in range(n):
-        for c in range(m):
-            RW[s, c] = 0.0
-        for q in range(nr):
+        for c in range(V.shape[1]):
+            V[M[s], c] = RW[s, c]
+
+
+def rows_times(B, n, V, out):
+    """``out[s] = B[s] @ V`` for ``s < n`` (``B``'s zeros skipped); ``out`` must not be ``V``."""
+    for s in range(n):
+        for c in range(V.shape[1]):
+            out[s, c] = 0.0
+        for q in range(V.shape[0]):
             a = B[s, q]
             if a != 0.0:
-                for c in range(m):
-                    RW[s, c] += a * V[q, c]
-    for s in range(n):
-        for c in range(m):
-            V[M[s], c] = RW[s, c]
+                for c in range(V.shape[1]):
+                    out[s, c] += a * V[q, c]

@@ -55,9 +55,10 @@ from .tangent import SensitivityError
 #: would give, bit for bit, so a branch does not depend on what was computed before it.
 _CACHES: OrderedDict = OrderedDict()
 _KEEP = 4
-#: The most bytes the modes' matrices ``A`` of one model may hold; the guard gradients, clusters, projections,
-#: resets and the compiled cluster steps' plans get an eighth of it each, the powers of ``A`` (:data:`POWERS_BELOW`) and of its blocks a quarter, and a
-#: sparse ``A``'s powers on their pattern (:data:`SPARSE_STEPS_FROM`) another quarter.
+#: The most bytes the modes' matrices ``A`` of one model may hold; the guard gradients, clusters, projections and
+#: resets get an eighth of it each, the powers of ``A`` (:data:`POWERS_BELOW`) and of its blocks a quarter, a
+#: sparse ``A``'s powers on their pattern (:data:`SPARSE_STEPS_FROM`) another quarter, and the compiled cluster
+#: steps' plans a half (an Iwan ring's are keyed by its labels too: a 24-blade ring's period holds 66 MB).
 #: A long continuation of a ring meets thousands of modes (4888 on the
 #: 24-blade ring from 270 to 300 rad/s, 360 MB of dense ``A``; from :data:`GROUPED_FROM` states on they are
 #: sparse, 22-28 kB each at 96 blades, where dense they were 1.2 MB and a period's 2672 overflowed the budget).
@@ -89,9 +90,9 @@ SPARSE_STEPS_DENSITY = 0.25
 #: the dense power (squarings), which costs a product for each bit of the run's length.
 SPARSE_RUN_MAX = 16
 
-#: Step a cluster through its events in compiled code (``cluster_step`` of :mod:`.contact_replay`) where the laws
-#: have no labels; else, and with False, in Python (:meth:`ContactTangent._cluster_step`, the reference the
-#: compiled step is tested against).
+#: Step a cluster through its events in compiled code (``cluster_step`` of :mod:`.contact_replay`; laws with labels
+#: from plans of the Python step's decisions); with False in Python (:meth:`ContactTangent._cluster_step`, the
+#: reference the compiled step is tested against).
 COMPILED_CLUSTER_STEPS = True
 
 #: Clusters of up to this many rows are stepped compiled; larger ones (a ring that sticks closed is one cluster) in
@@ -586,10 +587,7 @@ class ContactTangent:
             # relative velocity not at all). Central differences at y, row by row
             gy = np.full(self.n, np.nan)
         else:
-            key = (cm.tobytes(), int(j), int(gi))
-            gy = self._gy.get(key)
-            if gy is None:
-                self._gy[key] = gy = self._guard_gradient_at_zero(cm, j, gi)
+            gy = self._kept_guard_gradient(cm, j, gi)
         self._factor(cm)
         gt, kept = self.mod.guard_derivatives(float(t), y, cm, int(j), int(gi), rows, steps, 1e-6 * H, gy[rows],
                                               ig.I, ig.R, ig.WI, ig.WF, self._G, self._work[4], cols)
@@ -598,6 +596,15 @@ class ContactTangent:
         local = np.zeros(self.n)
         local[rows] = cols
         return local, gt
+
+    def _kept_guard_gradient(self, cm, j: int, gi: int) -> np.ndarray:
+        """Contact ``j``'s guard ``gi``'s gradient in ``cm`` from the zero state (:meth:`_guard_gradient_at_zero`),
+        kept by mode and guard."""
+        key = (cm.tobytes(), int(j), int(gi))
+        gy = self._gy.get(key)
+        if gy is None:
+            self._gy[key] = gy = self._guard_gradient_at_zero(cm, j, gi)
+        return gy
 
     def _sticking(self, cm) -> tuple:
         """The contacts that stick rigidly in ``cm``."""
@@ -712,7 +719,7 @@ class ContactTangent:
             return yy
 
         n = self.n
-        own, free, cols = self._reset_rows(j, rows)[:3]
+        free, cols = self._reset_rows(j, rows)[1:3]
         labels = self._contact_labels[j]
         y0 = y if y0 is None else y0
         steps = 1e-6 * np.maximum(np.abs(y[cols]), 1e-3 * max(float(np.max(np.abs(y0[:n]))), 1e-300))
@@ -1148,11 +1155,7 @@ class ContactTangent:
                 if self._contact_labels[fired[0]].size:
                     gyr[g] = np.nan   # differences at the event (:meth:`_guard_gradient`)
                 else:
-                    key = (cm.tobytes(), *fired)
-                    gy = self._gy.get(key)
-                    if gy is None:
-                        self._gy[key] = gy = self._guard_gradient_at_zero(cm, *fired)
-                    gyr[g] = gy[rows]
+                    gyr[g] = self._kept_guard_gradient(cm, *fired)[rows]
             after = cm.copy()
             for j, gi, to in group:
                 after[j] = to
