@@ -268,7 +268,8 @@ def test_the_reduced_map_needs_whole_steps_and_a_ring():
 
 def test_the_continue_command_with_cyclic(tmp_path, capsys):
     """``blademodel continue --cyclic``: the branch on the reduced map, saved and reported as any (its events of
-    the whole period); without it, a tuned ring gets a hint that it may be used (a mistuned one none); refused on a
+    the whole period); without it, a tuned ring gets a hint that it may be used (a mistuned one a hint on --grazing-tol instead,
+    unless given); refused on a
     mistuned ring (exit code 2, naming the field); taken with ``--switch`` (whose branches run on the whole map:
     ``test_a_period_doubling_found_on_the_reduced_map_is_switched_on_the_whole_one``)."""
     import json
@@ -295,7 +296,11 @@ def test_the_continue_command_with_cyclic(tmp_path, capsys):
     assert "mistuning" in capsys.readouterr().err
     assert main(["continue", yaml, "--param", "omega", "--from", "280", "--to", "280.05", "--workers", "1",
                  "--set", "mistuning_std=0.02", "--max-points", "3"]) == 0
-    assert "hint" not in capsys.readouterr().err   # a mistuned ring gets no hint
+    err = capsys.readouterr().err
+    assert "--cyclic" not in err and "hint: the blades or contacts of this ring differ" in err   # not the cyclic hint
+    assert main(["continue", yaml, "--param", "omega", "--from", "280", "--to", "280.05", "--workers", "1",
+                 "--set", "mistuning_std=0.02", "--max-points", "3", "--grazing-tol", "inf"]) == 0
+    assert "hint" not in capsys.readouterr().err   # its grazing points' tolerance given: no hint
     assert main(["continue", yaml, "--param", "omega", "--from", "280", "--to", "280.4", "--cyclic", "--switch",
                  "--json", "--workers", "1"]) == 0   # no period doubling here: nothing to switch to, and no refusal
     assert json.loads(capsys.readouterr().out)["message"] == "reached omega = 280.4"
