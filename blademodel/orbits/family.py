@@ -37,6 +37,7 @@ class _Family:
                                  f"branch lands on the end of the range where the field takes no values past "
                                  f"it)") from None
         self._cache: dict = {}
+        self._log_size = 64      # the event log's entries a new map's runs start with (the most its maps needed)
         self._dropped = (0, 0)   # integrations and replays of the maps no longer kept
         self._first = None
         self.first_value = None   # the field's value the first integrator was built at
@@ -112,12 +113,16 @@ class _Family:
         """The period map at ``value`` (the first integrator's parameters changed, where the kernel allows)."""
         key = float(value)
         if key not in self._cache:
+            # the event log's size the maps so far needed: a new map that starts smaller integrates its first run
+            # twice
+            self._log_size = max([self._log_size] + [P.log_size for P in self._cache.values()])
             if len(self._cache) > 8:
                 old = self._cache.pop(next(iter(self._cache)))
                 self._dropped = (self._dropped[0] + old.evaluations, self._dropped[1] + old.replays)
             # reduced, the map covers T / d; the orbits' period (self.periods) is the symmetry's
             self._cache[key] = PeriodMap(self._integrator_at(key), 1 if self.symmetry else self.periods,
-                                         self.jacobian, self.workers, symmetry=self.symmetry)
+                                         self.jacobian, self.workers, symmetry=self.symmetry,
+                                         log_size=self._log_size)
         return self._cache[key]
 
     @property

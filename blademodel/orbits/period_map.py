@@ -181,6 +181,12 @@ class PeriodMap:
         ``periods`` excitation periods.
         ``integrator`` may be the whole period's (the map integrates with a copy over
         ``T / d``) or that copy already (:meth:`~blademodel.orbits.cyclic.CyclicSymmetry.reduced`).
+    log_size : int
+        Entries of the event log a run starts with. A run that logs more is integrated
+        again with room for them, and the map keeps the larger size (:attr:`log_size`).
+        A continuation's maps at new values of its field start from the size their
+        predecessors learned: a mistuned 24-blade ring logs about 170 events a period,
+        and each first run at a new value was integrated twice.
     """
 
     #: A Jacobian by differences is shared among threads only where one column (two integrations) takes at
@@ -188,7 +194,7 @@ class PeriodMap:
     thread_column_seconds = 2e-3
 
     def __init__(self, integrator, periods: int = 1, jacobian: str = "auto", workers: int | None = None,
-                 symmetry=None):
+                 symmetry=None, log_size: int = 64):
         if int(periods) < 1:
             raise ValueError(f"periods must be a whole number >= 1, got {periods!r}")
         if jacobian not in JACOBIAN_METHODS:
@@ -214,7 +220,7 @@ class PeriodMap:
         self.exact = jacobian in ("auto", "tangent") and kernel in ("product", "contact")
         self._contact_tangent = None
         self._last: tuple | None = None   # (key, MapRun) of the last run
-        self._log_size = 64
+        self._log_size = max(int(log_size), 1)
 
     def run(self, y, mode) -> MapRun:
         """Integrate the map from ``(y, mode)``, recording every step and logging every event.
@@ -262,6 +268,11 @@ class PeriodMap:
                    instant=CASCADE_BRACKETS * ig.event_tol * float(rec[0][1] - rec[0][0]))
         self._last = (key, r)
         return r
+
+    @property
+    def log_size(self) -> int:
+        """The event log's entries a run starts with: at least the most any run of this map logged."""
+        return self._log_size
 
     @property
     def last_run(self) -> MapRun | None:
