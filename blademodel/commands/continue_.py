@@ -160,7 +160,7 @@ def _hint_grazing(config) -> None:
         return
     print("hint: the blades or contacts of this ring differ, so its contacts graze one by one, and locating each "
           "grazing point to 1e-7 may be most of the run: --grazing-tol 1e-3 or inf leaves the branch's points the "
-          "same (2.6 and 7.9 times cheaper on a mistuned 24-blade ring; docs/continuation_settings.md)",
+          "same (2.5 and 8.3 times cheaper on a mistuned 24-blade ring; docs/continuation_settings.md)",
           file=sys.stderr)
 
 
