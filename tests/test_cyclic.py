@@ -268,9 +268,9 @@ def test_the_reduced_map_needs_whole_steps_and_a_ring():
 
 def test_the_continue_command_with_cyclic(tmp_path, capsys):
     """``blademodel continue --cyclic``: the branch on the reduced map, saved and reported as any (its events of
-    the whole period); without it, a tuned ring gets a hint that it may be used (a mistuned one a hint on --grazing-tol instead,
-    unless given); refused on a
-    mistuned ring (exit code 2, naming the field); taken with ``--switch`` (whose branches run on the whole map:
+    the whole period); without it, a tuned ring gets a hint that it may be used (a mistuned one a hint on
+    ``--grazing-tol`` instead, unless that is given); refused on a mistuned ring (exit code 2, naming the field);
+    taken with ``--switch`` (whose branches run on the whole map:
     ``test_a_period_doubling_found_on_the_reduced_map_is_switched_on_the_whole_one``)."""
     import json
 
