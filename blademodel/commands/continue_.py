@@ -155,8 +155,8 @@ def _hint_grazing(config) -> None:
     """On a ring whose blades or contacts differ, say on stderr that ``--grazing-tol`` may spare most of the run:
     its contacts graze one by one, and each grazing point is located to ``locate_tol``."""
     from ..config import BladedDisk
-    if not isinstance(config, BladedDisk) or not (np.any(config.deviations != 0.0) or config.blade_values
-                                                  or config.contacts):
+    from ..orbits.cyclic import what_differs
+    if not isinstance(config, BladedDisk) or what_differs(config) is None:
         return
     print("hint: the blades or contacts of this ring differ, so its contacts graze one by one, and locating each "
           "grazing point to 1e-7 may be most of the run: --grazing-tol 1e-3 or inf leaves the branch's points the "

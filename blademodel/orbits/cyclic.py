@@ -177,6 +177,18 @@ class CyclicSymmetry:
         return out
 
 
+def what_differs(config) -> str | None:
+    """What makes a bladed disk's blades or contacts differ (its mistuning, or single blades' or contacts' values),
+    or None for a tuned ring."""
+    if np.any(config.deviations != 0.0):
+        value = config.mistuning if config.mistuning is not None else config.mistuning_std
+        return f"mistuning / mistuning_std = {value!r} makes the blades differ"
+    for name in ("blade_values", "contacts"):
+        if getattr(config, name):
+            return f"{name} = {getattr(config, name)!r} makes single blades or contacts differ"
+    return None
+
+
 def reducible(config) -> tuple[int, int, int]:
     """``(N, EO, g)`` of a bladed disk's config that the cyclic reduction can take (``g = gcd(EO, N)``; the reduced
     map covers ``T / (N / g)``).
@@ -191,14 +203,9 @@ def reducible(config) -> tuple[int, int, int]:
         raise CyclicError(f"the cyclic reduction needs a bladed disk (model: bladed_disk), not "
                           f"{type(config).__name__}")
     N, EO = int(config.blades), int(config.engine_order)
-    if np.any(config.deviations != 0.0):
-        raise CyclicError("the cyclic reduction needs a tuned ring: mistuning / mistuning_std = "
-                          f"{config.mistuning if config.mistuning is not None else config.mistuning_std!r} "
-                          "makes the blades differ")
-    for name in ("blade_values", "contacts"):
-        if getattr(config, name):
-            raise CyclicError(f"the cyclic reduction needs a tuned ring: {name} = {getattr(config, name)!r} "
-                              f"makes single blades or contacts differ")
+    differing = what_differs(config)
+    if differing is not None:
+        raise CyclicError(f"the cyclic reduction needs a tuned ring: {differing}")
     g = math.gcd(EO, N)
     if g == N:
         raise CyclicError(f"engine_order = {EO} drives every blade in phase (a multiple of blades = {N}): "
