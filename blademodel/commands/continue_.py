@@ -52,7 +52,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--cyclic", action="store_true",
                    help="a tuned bladed disk under engine-order excitation: follow its travelling-wave orbits on "
                         "the map over T / d reduced by their symmetry (d = N / gcd(EO, N); 8 times fewer steps on "
-                        "24 blades at engine order 3), the whole ring's multipliers from it (docs/orbits.md); "
+                        "24 blades at engine order 3), the whole ring's multipliers from it (docs/orbits_rings.md); "
                         "with --switch, the period-doubled branches (on the reduced map where it has a branch point at "
                         "the doubling, else on the whole ring's map) and the branches crossing at branch points (on "
                         "the map over 2 T / d where the reduced map period-doubles there, else on the whole ring's "
@@ -148,7 +148,7 @@ def _hint_cyclic(config, period: int) -> None:
     except CyclicError:
         return
     print(f"hint: this ring is tuned and driven in engine order: --cyclic follows its travelling waves on T / "
-          f"{N // g} of the period, the whole ring's multipliers from it (docs/orbits.md)", file=sys.stderr)
+          f"{N // g} of the period, the whole ring's multipliers from it (docs/orbits_rings.md)", file=sys.stderr)
 
 
 def _hint_grazing(config) -> None:

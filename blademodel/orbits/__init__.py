@@ -6,9 +6,11 @@ map that takes the state at ``t = 0`` to the state at ``t = n T``
 compiled kernel: RK4 or RK8 with located events). :func:`find_periodic_orbit` finds
 one by Newton's method on that map; the eigenvalues of the map's Jacobian (the
 monodromy matrix) are the orbit's Floquet multipliers. The Jacobian is the tangent of
-the flow (variational equations with saltation matrices at the events,
-:mod:`blademodel.numeric.tangent`) on the product-mode kernel, central differences of
-the map elsewhere (``docs/orbits.md``). :func:`continuation` follows a branch in a
+the flow, with saltation matrices at the events: variational equations on the
+product-mode kernel (:mod:`blademodel.numeric.tangent`), the recorded run replayed through
+each mode's step matrix on the per-contact kernel
+(:mod:`blademodel.numeric.contact_tangent`); central differences of the map where it
+fails (``docs/orbits_tangent.md``). :func:`continuation` follows a branch in a
 config field; :func:`period_doubled_branch` switches to the branch born at a period
 doubling, :func:`branch_point_branch` to the one that crosses it at a branch point.
 """

@@ -105,7 +105,7 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         integrations each, which on a mistuned ring is most of the cost; a coarser
         ``grazing_tol`` moves only where the grazing points are reported, not the branch
         (its points are the same to the bit), and ``inf`` reports each at the first
-        point past it, with no trials (``docs/orbits.md``, *Continuation*).
+        point past it, with no trials (``docs/continuation.md``).
     steps_per_period, event_tol, method, kernel
         The integrator's settings.
     jacobian : {"auto", "tangent", "differences", "forward"}

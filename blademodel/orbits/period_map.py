@@ -165,7 +165,7 @@ class PeriodMap:
         (:mod:`blademodel.numeric.contact_tangent`). ``"auto"`` takes it and falls back
         to central differences where it fails (an event with a zero guard rate).
         ``"forward"`` takes forward differences everywhere: half the integrations of
-        central ones, the multipliers to about ``rel_step`` (``docs/orbits.md``).
+        central ones, the multipliers to about ``rel_step`` (``docs/orbits.md``, ``docs/frf.md``).
     workers : int, optional
         Threads that integrate the difference quotients of :meth:`differences` (each
         with its own copy of the integrator's work arrays; the kernels release the GIL):

@@ -2,7 +2,7 @@
 
 Run from the repository root: ``python docs/tools/continuation_survey.py``. Prints, for each
 branch, its points, its special points by kind and why it ended (about 1 min). The table in
-``docs/orbits.md`` ("How far branches get") comes from it. With ``--scan`` it runs the omega
+``docs/continuation.md`` ("How far branches get") comes from it. With ``--scan`` it runs the omega
 branches of both laws, both ways, at each longest step ``ds_max`` in :data:`SCAN` instead
 (about 3 min): whether the branches get through at every step length.
 """

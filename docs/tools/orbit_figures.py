@@ -38,7 +38,7 @@ def frf_pair():
     """Both laws, omega from 225 to 405 rad/s (the paper's 290 inside).
 
     Both branches reach 200 rad/s and 430 rad/s (the Coulomb one through a nonsmooth fold at
-    420.684 rad/s: ``nonsmooth_fold``); docs/orbits.md.
+    420.684 rad/s: ``nonsmooth_fold``); docs/orbits.md and docs/frf.md.
     """
     fig = Figure(figsize=(9, 3.6))
     for j, law in enumerate(("coulomb", "bilinear")):
@@ -129,7 +129,7 @@ def frf_bladed_disk():
 def doublings_bladed_disk():
     """The tuned 96-blade Coulomb ring (engine order 12, 600 steps a period) on the cyclic reduction from 271.5 to
     276.5 rad/s, and the period-doubled branch born at each of its doublings, followed on the reduced map too
-    (docs/orbits.md, *Period doublings on the reduced map*): Poincare samples of blade 1's x."""
+    (docs/orbits_rings.md, *Period doublings on the reduced map*): Poincare samples of blade 1's x."""
     cfg = apply_overrides(load_config("models/bladed_disk_24.yaml"), {"blades": "96", "engine_order": "12"})
     kw = dict(steps_per_period=600, workers=2)
     t = time.process_time()
@@ -155,7 +155,7 @@ def doublings_bladed_disk():
 
 def branch_points_twin_blades():
     """Two identical blades on gapped stops (``models/twin_blades_stops.yaml``) in omega from 900 to 2200 rad/s: the
-    branch of orbits with the blades alike and the branches that cross it at its two branch points (docs/orbits.md,
+    branch of orbits with the blades alike and the branches that cross it at its two branch points (docs/orbits_rings.md,
     *Branch points*), the first harmonic of each blade."""
     cfg = load_config("models/twin_blades_stops.yaml")
     t = time.process_time()
@@ -192,7 +192,7 @@ def branch_points_twin_blades():
 def branch_points_ring():
     """The tuned 24-blade Coulomb ring driven twice as hard (F0 = 120 N) on the cyclic reduction from 315 to 330
     rad/s, the branch crossing its travelling waves at their first branch point (on the map over T / 4), and
-    integrations from rest (docs/orbits.md, *Branch points*): the spread of the blades' first harmonics."""
+    integrations from rest (docs/orbits_rings.md, *Branch points*): the spread of the blades' first harmonics."""
     from blademodel.numeric.kernels import make_integrator
     cfg = apply_overrides(load_config("models/bladed_disk_24.yaml"), {"F0": "120"})
     t = time.process_time()
@@ -246,7 +246,7 @@ def branch_points_ring():
 def mistuned_envelope():
     """The 24-blade Coulomb ring through its resonance, 1200 to 1470 rad/s, tuned (on the cyclic reduction) and
     mistuned (2 %, seed 1, the whole ring's map): the largest and smallest of the blades' first harmonics of x
-    (docs/orbits.md, *Mistuned rings*), and each blade at the mistuned ring's stable peak, with an integration from
+    (docs/orbits_rings.md, *Mistuned rings*), and each blade at the mistuned ring's stable peak, with an integration from
     rest there."""
     from dataclasses import replace
 
