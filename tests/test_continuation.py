@@ -72,6 +72,42 @@ def test_a_period_doubling_of_the_bilinear_pair_in_gamma(pd_branch):
         assert np.dot(d1, d0) / np.dot(d0, d0) == pytest.approx(mu.real, rel=1e-2)
 
 
+def test_special_points_are_listed_along_the_branch(pd_branch, capsys):
+    """A step's special points are found by kind (changes of stability first, grazing points after them); the
+    branch lists them along the branch, and the command prints them so, each multiplier said for what it is (a
+    grazing point's is that of the branch's point before it, not of an orbit at the grazing)."""
+    from pathlib import Path
+
+    from blademodel.cli import main
+    b = pd_branch
+    assert np.all(np.diff(b.params) > 0)   # gamma rises along this branch: along it is by the field's value
+    where = [p.param for p in b.special]
+    assert where == sorted(where)
+    pd = b.points("period-doubling")[0]
+    assert any(q.kind == "grazing" and q.index == pd.index and q.param < pd.param for q in b.special)
+    yaml = str(Path(__file__).resolve().parent.parent / "models" / "blade_pair_bilinear.yaml")
+    assert main(["continue", yaml, "--param", "gamma", "--from", "7.2", "--to", "7.5"]) == 0
+    lines = [s.strip() for s in capsys.readouterr().out.splitlines()
+             if s.startswith("  ") and s.split(" at gamma = ")[0].strip() in {p.kind for p in b.special}]
+    kinds = [s.split(" at ")[0] for s in lines]
+    values = [float(s.split(" at gamma = ")[1].split()[0].rstrip(",")) for s in lines]
+    assert "period-doubling" in kinds and "grazing" in kinds and values == sorted(values)
+    for s, kind in zip(lines, kinds):
+        said = "(largest multiplier at the branch's point before it: " if kind == "grazing" else "(multiplier "
+        assert said in s
+
+
+def test_a_bracket_is_printed_with_its_ends_apart():
+    """A located point's bracket, narrower than eight digits tell (the tuned 24-blade ring's grazing point at
+    277.40497 rad/s printed as [277.40497, 277.40497]), is printed to as many digits as part its ends."""
+    from blademodel.commands.continue_ import _distinct
+    lo, hi = 277.4049683, 277.4049741
+    a, b = _distinct(lo, hi)
+    assert a != b and float(a) < float(b) and abs(float(a) - lo) < 1e-6 and abs(float(b) - hi) < 1e-6
+    assert _distinct(6.5181520, 6.5181525) == ("6.518152", "6.5181525")   # eight digits where they do
+    assert _distinct(1.0, 1.0) == ("1", "1")                               # never apart: the most digits, same
+
+
 def test_the_branch_crosses_a_stick_slip_switch_at_the_section():
     """Near gamma = 4.5253 the orbit's stick-to-slip switch passes t = 0, a kink of the period map: the branch
     goes through, and its points there are the orbits shooting finds at those values."""

@@ -305,13 +305,14 @@ def run(args: argparse.Namespace) -> int:
               f"{'stable' if branch.stable[k] else 'unstable'})")
     for p in branch.special:
         if p.kind == "gap":
-            print(f"  gap: no orbit found between {args.param} = {p.bracket[0]:.8g} and {p.bracket[1]:.8g}; the branch "
+            lo, hi = _distinct(*p.bracket)
+            print(f"  gap: no orbit found between {args.param} = {lo} and {hi}; the branch "
                   f"goes on from the orbit at {p.param:.8g}, which may lie on another branch (more steps a period, "
                   f"--steps-per-period, may close the gap)")
             continue
-        within = "" if p.bracket is None else f", somewhere in [{p.bracket[0]:.8g}, {p.bracket[1]:.8g}]"
-        print(f"  {p.kind} at {args.param} = {p.param:.8g}{within} (multiplier {p.multiplier.real:.6g}"
-              f"{p.multiplier.imag:+.6g}i)")
+        within = "" if p.bracket is None else ", somewhere in [{}, {}]".format(*_distinct(*p.bracket))
+        print(f"  {p.kind} at {args.param} = {p.param:.8g}{within} ({_MULTIPLIER_IS.get(p.kind, 'multiplier')} "
+              f"{p.multiplier.real:.6g}{p.multiplier.imag:+.6g}i)")
     for what, switched_to in (("period doubling", doubled), ("branch point", branched)):
         for k, b in enumerate(switched_to, 1):
             if b is None:
@@ -325,6 +326,21 @@ def run(args: argparse.Namespace) -> int:
         if name:
             print(f"{what} {name}")
     return 0
+
+
+def _distinct(lo: float, hi: float) -> tuple[str, str]:
+    """A bracket's ends printed to eight significant digits, or to as many more as tell them apart (up to 17)."""
+    for digits in range(8, 18):
+        a, b = f"{lo:.{digits}g}", f"{hi:.{digits}g}"
+        if a != b:
+            break
+    return a, b
+
+
+#: What a special point's multiplier is, where it is not the one on the unit circle (``SpecialPoint.multiplier``).
+_MULTIPLIER_IS = {"grazing": "largest multiplier at the branch's point before it:",
+                  "border-collision": "multiplier that jumps across the circle, past it:",
+                  "nonsmooth-fold": "multiplier beside it, none crossing the circle:"}
 
 
 def _reduction(b, config) -> tuple:

@@ -405,7 +405,7 @@ def _assemble(ctx, pts, special, message: str, before: Branch | None, complete: 
                events=np.array([p["events"] for p in pts], dtype=np.int64) * (
                    fam.symmetry.fraction * fam.symmetry.periods if fam.symmetry else 1),
                residuals=np.array([p["residual"] for p in pts]),
-               sections=np.array([p["sections"] for p in pts]), special=list(special),
+               sections=np.array([p["sections"] for p in pts]), special=_along_branch(special, pts, ctx),
                state_names=fam.state_names()[:ctx.n], message=message, integrations=integrations,
                replays=replays, modes=np.array([_mode_row(p["mode"]) for p in pts]), complete=complete,
                mean_squares=np.array([p["ms"] for p in pts]))
@@ -419,6 +419,24 @@ def _assemble(ctx, pts, special, message: str, before: Branch | None, complete: 
     return replace(b, **{f: np.concatenate([np.asarray(getattr(before, f))[:k], getattr(b, f)]) for f in _PER_POINT},
                    special=list(before.special) + [replace(q, index=q.index + k) for q in special],
                    integrations=before.integrations + integrations, replays=before.replays + replays)
+
+
+def _along_branch(special: list, pts: list, ctx) -> list:
+    """The special points in their order along the branch: by the point after which each lies, then by where it
+    projects onto the chord to the next point (in the scaled unknowns). Those of one step are found by kind, the
+    changes of stability first and the grazing points after them, whatever their places."""
+    def place(p: SpecialPoint) -> tuple:
+        i = p.index
+        if i + 1 >= len(pts):
+            return i, 0.0
+        a, b, x = (np.append(np.asarray(q[0])[:ctx.n] / ctx.scale, q[1] / ctx.span)
+                   for q in ((pts[i]["state"], pts[i]["param"]), (pts[i + 1]["state"], pts[i + 1]["param"]),
+                             (p.state, p.param)))
+        chord = b - a
+        length = float(chord @ chord)
+        return i, (float((x - a) @ chord) / length if length > 0.0 else 0.0)
+
+    return sorted(special, key=place)
 
 
 #: The fields of :class:`Branch` that hold one entry per point.

@@ -41,7 +41,8 @@ class SpecialPoint:
     multiplier : complex
         The multiplier that crossed the unit circle, at the located point; at a grazing
         point, the largest multiplier of the branch point before it (the map is not
-        differentiable at the grazing).
+        differentiable at the grazing); at a border collision, the one that jumps across
+        the circle, past the kink; at a nonsmooth fold, one beside it, off the circle.
     index : int
         The branch point after which it lies.
     mode : int or ndarray, optional
@@ -95,6 +96,8 @@ class Branch:
         The states at ``t = k T``, ``k = 0 .. periods - 1``: the orbit's Poincare samples
         (a period-2 orbit has two; a bifurcation diagram draws them all).
     special : list of SpecialPoint
+        In their order along the branch (by the point after which each lies, then along
+        the step from it).
     state_names : list of str
     message : str
         Why the continuation ended.
