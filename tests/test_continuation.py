@@ -988,3 +988,30 @@ def test_a_range_that_ends_outside_the_field_s_values_is_refused_naming_the_fiel
     model = str(Path(__file__).resolve().parents[1] / "models" / "blade_pair_coulomb.yaml")
     assert main(["continue", model, "--param", "mu", "--from", "0.1", "--to", "-2e-1"]) == 2
     assert "mu = -0.2, an end of the range, is not a value BladePair takes" in capsys.readouterr().err
+
+
+def test_the_branch_plot_gives_each_of_many_branches_its_own_colours():
+    """A branch with its switched branches (the twin blades' five: the branch, two doubled, two crossing) draws each
+    in colours of its own; with four colour pairs the fifth drew in the first's, over it."""
+    from matplotlib.colors import to_hex
+
+    from blademodel.orbits import Branch
+    from blademodel.plots.branch import branch_figure
+
+    def branch(shift, periods=1):
+        p = np.array([1.0, 2.0, 3.0])
+        h = np.full((3, 1), 1.0 + shift, dtype=complex)
+        return Branch(field="omega", periods=periods, params=p, states=np.zeros((3, 1)),
+                      multipliers=np.zeros((3, 1), dtype=complex), stable=np.array([True, False, False]),
+                      amplitudes=np.abs(h), harmonics=h, state_names=["x1"])
+
+    branches = [branch(k) for k in range(7)]
+    labels = [f"branch {k}" for k in range(7)]
+    ax = branch_figure(branches, "x1", labels=labels).axes[0]
+    colours = {}
+    for line in ax.lines:
+        if line.get_label().startswith("branch "):
+            colours.setdefault(line.get_label().split(",")[0], set()).add(to_hex(line.get_color()))
+    assert len(colours) == 7 and all(len(c) == 2 for c in colours.values())
+    every = [c for pair in colours.values() for c in pair]
+    assert len(set(every)) == len(every)   # no colour drawn for two branches, nor for stable and unstable alike

@@ -27,8 +27,13 @@ def _between(value, x, y, k):
 #: Beyond this many grazing points on a branch (a mistuned ring's contacts graze one by one) their markers are small.
 CROWDED = 40
 
-#: Line colours of successive branches in one figure: (stable, unstable).
-COLOURS = [("C0", "C3"), ("C2", "C1"), ("C4", "C6"), ("C9", "C5")]
+#: Line colours of successive branches in one figure: (stable, unstable). The first four use the default colour
+#: cycle; the others, a dark and a light tone of one hue each (matplotlib's tab20b), so that a figure with a branch,
+#: its period-doubled branches and those crossing at its branch points (``blademodel continue --switch``) repeats
+#: no colour up to ten branches.
+COLOURS = [("C0", "C3"), ("C2", "C1"), ("C4", "C6"), ("C9", "C5"), ("C8", "C7"),
+           ("#393b79", "#9c9ede"), ("#637939", "#b5cf6b"), ("#8c6d31", "#e7ba52"), ("#843c39", "#e7969c"),
+           ("#7b4173", "#de9ed6")]
 
 
 def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", overlay=None, ax=None,
