@@ -147,3 +147,32 @@ def test_the_orbit_command(capsys):
     assert rep["stable"] is True and abs(rep["multipliers"][0]["abs"] - abs(o.multipliers[0])) < 1e-9
     assert main(["orbit", yaml, "--periods", "0"]) == 2
     assert "--periods must be at least 1" in capsys.readouterr().err
+
+
+def test_a_tolerance_below_rounding_is_named_as_such(capsys):
+    """Asked for a residual below what the arithmetic gives (the bilinear pair's orbits stall between 1e-13 and
+    8e-13), shooting and continuation say that ``tol`` is what stops them and what tolerance to take, not that the
+    start is far from an orbit or that more steps a period may get through; a start far from any orbit (the chaotic
+    pair at gamma = 10, two Newton steps) is not put down to rounding."""
+    from blademodel.orbits import continuation
+    cfg = BladePair(friction="bilinear")
+    with pytest.raises(ShootingError) as e:
+        find_periodic_orbit(cfg.build(), tol=1e-15)
+    assert e.value.least_tol is not None and 1e-13 <= e.value.least_tol <= 1e-10
+    assert min(e.value.history) < e.value.least_tol and "rounding errors" in str(e.value)
+    with pytest.raises(ShootingError) as e:
+        find_periodic_orbit(BladePair(friction="bilinear", gamma=10).build(), transient=3, max_iter=2)
+    assert e.value.least_tol is None and "rounding" not in str(e.value)
+    b = continuation(cfg, "omega", 280, 280.02, tol=1e-13, workers=1)
+    assert b.params[-1] < 280.02 and "take tol (--tol)" in b.message and "steps_per_period" not in b.message
+    with pytest.raises(ShootingError) as e:
+        continuation(cfg, "omega", 280, 281, tol=1e-15, workers=1)
+    assert e.value.least_tol is not None and "far from such an orbit" not in str(e.value)
+    from pathlib import Path
+
+    from blademodel.cli import main
+    yaml = str(Path(__file__).resolve().parent.parent / "models" / "blade_pair_bilinear.yaml")
+    for command in (["orbit", yaml], ["continue", yaml, "--param", "omega", "--from", "280", "--to", "281"]):
+        assert main(command + ["--tol", "1e-15"]) == 1
+        err = capsys.readouterr().err
+        assert "hint: --tol 1e-1" in err and "--transient" not in err

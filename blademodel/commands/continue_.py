@@ -207,7 +207,9 @@ def run(args: argparse.Namespace) -> int:
         branch = _continued(args.out, config, run_settings, "branch", args.param, branch_of)
     except (ShootingError, FlowError) as e:
         print(f"error: {e}", file=sys.stderr)
-        if getattr(e, "at_start", False):
+        if getattr(e, "least_tol", None) is not None:
+            print(f"hint: --tol {e.least_tol:g}", file=sys.stderr)
+        elif getattr(e, "at_start", False):
             print("hint: --transient N (periods from rest before shooting), another --from, or --period 2",
                   file=sys.stderr)
         return 1

@@ -74,6 +74,8 @@ def run(args: argparse.Namespace) -> int:
                                     workers=args.workers)
     except (ShootingError, FlowError, SimulationError) as e:
         print(f"error: {e}", file=sys.stderr)
+        if getattr(e, "least_tol", None) is not None:
+            print(f"hint: --tol {e.least_tol:g}", file=sys.stderr)
         return 1
     mode = orbit.mode
     mode_name = ig.mode_label(mode) if isinstance(mode, np.ndarray) else ig.mode_names[int(mode)]

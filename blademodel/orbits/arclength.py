@@ -58,7 +58,8 @@ from .corrector import _Context, _at_kink, _field_bracket, _off_circle, _special
 from .family import _Family
 from .period_map import FlowError, _copy, _key, kernel_mode
 from .self_overlap import NEAR, SelfOverlap, segment_ratios
-from .shooting import (ShootingError, _n_coordinates, _scale_of_excursions, find_periodic_orbit, residual_size)
+from .shooting import (ROUNDING_LEVEL, ShootingError, _n_coordinates, _scale_of_excursions,
+                       find_periodic_orbit, residual_size)
 
 
 def continuation(config, name: str, start: float, stop: float, *, periods: int = 1, guess=None, mode=None,
@@ -448,10 +449,15 @@ def _no_first_orbit(e: ShootingError, name: str, at: float, periods: int, transi
                     guessed: bool) -> ShootingError:
     """The shooting error at a branch's first point, saying where it was and what may find an orbit there."""
     start = "from the guess" if guessed else f"after {transient} periods from rest"
-    err = ShootingError(f"no orbit of period {periods} found at the start, {name} = {at:g} ({start}): {e}. "
-                        f"Where the residual stays large the start is far from such an orbit (the motion there "
-                        f"may be chaotic or of another period): another transient, a guess, another start or "
-                        f"another period may find one", e.history, e.state)
+    if getattr(e, "least_tol", None) is not None:   # the tolerance is below rounding, the start is fine
+        err = ShootingError(f"no orbit of period {periods} found at the start, {name} = {at:g} ({start}) to the "
+                            f"tolerance asked: {e}", e.history, e.state)
+        err.least_tol = e.least_tol
+    else:
+        err = ShootingError(f"no orbit of period {periods} found at the start, {name} = {at:g} ({start}): {e}. "
+                            f"Where the residual stays large the start is far from such an orbit (the motion there "
+                            f"may be chaotic or of another period): another transient, a guess, another start or "
+                            f"another period may find one", e.history, e.state)
     err.at_start = True   # for the command's hint at its options
     return err
 
@@ -538,7 +544,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
                         A = None
                     jumped, h = True, 4 * ds_min * max(1.0, ds / ds_min) ** 0.5
                     continue
-                message = _stalled(ds_min, name, X[-1] * span, ctx.why, fam.settings["steps_per_period"])
+                message = _stalled(ds_min, name, X[-1] * span, ctx, fam.settings["steps_per_period"])
                 break
             h /= 2
             continue
@@ -548,9 +554,10 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             # a correction that returned a state that is not an orbit in the mode it is recorded in
             # (a guard, not expected to fire: the correctors check the mode the orbit comes back to)
             ctx.why = f"the corrected point's residual {new['residual']:.3g} exceeds tol"
+            ctx.rounding = new["residual"] if new["residual"] <= ROUNDING_LEVEL else None   # tol below rounding
             h /= 2
             if h < ds_min:
-                message = _stalled(ds_min, name, X[-1] * span, ctx.why, fam.settings["steps_per_period"])
+                message = _stalled(ds_min, name, X[-1] * span, ctx, fam.settings["steps_per_period"])
                 break
             continue
         new["regular"] = not (secant or arm)
@@ -834,16 +841,24 @@ def _passed(ctx, pts, X, step) -> bool:
 STALLED = "the step fell below ds_min"
 
 
-def _stalled(ds_min, name, value, why, steps_per_period) -> str:
+def _stalled(ds_min, name, value, ctx, steps_per_period) -> str:
     """Why a branch stopped where its step fell below ``ds_min``, with what may get it through.
 
     The integrator's discrete flow can lack orbits over a short stretch of the field, and
     the stretch moves with the step: the bilinear 24-blade ring from 290.6 rad/s stops at
     290.847 rad/s at 1000 steps a period and at 290.839 at 500, and passes at 2000 (where a
     run from 290.8 to 290.95 stops at 290.936 instead); the Coulomb pair has such a gap at
-    305.78 rad/s.
+    305.78 rad/s. Where the last attempts' residuals stopped falling at the integration's
+    rounding errors (``ctx.rounding``), ``tol`` is what stops the branch: the bilinear pair
+    at ``tol = 1e-13`` from 280 rad/s, whose residuals stop between ``1e-13`` and ``8e-13``.
     """
-    return (f"{STALLED} = {ds_min:g} at {name} = {value:.6g}: {why} (the integrator's discrete "
+    if ctx.rounding is not None:
+        least = float(10.0 ** np.ceil(np.log10(10.0 * ctx.rounding)))
+        return (f"{STALLED} = {ds_min:g} at {name} = {value:.6g}: the residuals stop falling at "
+                f"{ctx.rounding:.2g} and above, where the integration's rounding errors leave them: tol = "
+                f"{ctx.tol:g} asks for less than the arithmetic gives; take tol (--tol) {least:g} or more "
+                f"({ctx.why})")
+    return (f"{STALLED} = {ds_min:g} at {name} = {value:.6g}: {ctx.why} (the integrator's discrete "
             f"flow may lack orbits over a short stretch, which moves with the step: more steps a period, "
             f"steps_per_period (--steps-per-period) {2 * steps_per_period} instead of {steps_per_period}, may get "
             f"through)")

@@ -21,7 +21,7 @@ from .background import Locator, PendingPoint
 from .branch import SpecialPoint
 from .family import _Family
 from .period_map import FlowError, _copy, _key
-from .shooting import ShootingError, _same, _shoot, residual_size, scaled_residual
+from .shooting import ROUNDING_LEVEL, ShootingError, _same, _shoot, residual_size, scaled_residual
 
 
 def _turns(p, q, T_p=None) -> bool:
@@ -116,6 +116,9 @@ class _Context:
         self.iterations = 0
         self._run = None   # the last residual's run (its events and signature: :attr:`events`, :attr:`signature`)
         self.why = ""
+        # the least residual at which a correction or a shot since the last correction began stopped falling at the
+        # integration's rounding errors (below ROUNDING_LEVEL), or None: tol is then below what the arithmetic gives
+        self.rounding = None
 
     @property
     def discrete(self) -> np.ndarray:
@@ -158,6 +161,8 @@ class _Context:
                              self.rel_step, [])
         except (ShootingError, FlowError, np.linalg.LinAlgError, ValueError) as e:
             self.why = f"{self.why}; shooting at {self.fam.name} = {lam:.6g}: {e}"
+            if getattr(e, "least_tol", None) is not None:
+                self._met_rounding(min(e.history))
             return None, mode, None
         Xc = np.append(y / self.scale, X[-1])
         self.iterations = self.max_corrections // 2
@@ -166,6 +171,10 @@ class _Context:
             return Xc, mode, None
         A = self._jacobian_at(Xc, mode)
         return (Xc, mode, A) if A is not None else (None, mode, None)
+
+    def _met_rounding(self, residual: float) -> None:
+        """Note a residual that stopped falling at the integration's rounding errors (:attr:`rounding`)."""
+        self.rounding = residual if self.rounding is None else min(self.rounding, residual)
 
     def _jacobian_at(self, X, mode, column=None):
         """:meth:`jacobian` at a corrected point, or None (with ``why``) where a perturbed integration fails."""
@@ -254,6 +263,7 @@ class _Context:
         tol = self.tol if tol is None else tol
         Xp = X.copy()
         self.why = ""
+        self.rounding = None
         if not newton and A is None:
             raise ValueError("a correction without Newton's method needs A, the matrix Broyden's method starts from")
         retry = not newton   # how a retry from another mode corrects: Broyden's method (True) or Newton's
@@ -264,6 +274,7 @@ class _Context:
             tried.add((_key(mode), chord))
             Xc = Xp.copy()
             first_end = None
+            best = np.inf
             try:
                 G = np.vstack([A, T]) if chord else None
                 X_old = F_old = None
@@ -306,6 +317,8 @@ class _Context:
                     raise FlowError(f"no convergence in {it + 1} corrections (residual {res:.2g})")
             except (FlowError, np.linalg.LinAlgError, ValueError) as e:   # ValueError: a field out of its range
                 self.why = str(e)
+                if best <= ROUNDING_LEVEL:
+                    self._met_rounding(best)
                 if first_end is not None and (_key(first_end), retry) not in tried and \
                         all(_key(first_end) != _key(m) for m, _ in tries):
                     tries.append((_copy(first_end), retry))

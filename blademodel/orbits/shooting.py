@@ -10,12 +10,38 @@ from .period_map import FlowError, PeriodMap, _copy, kernel_mode
 
 
 class ShootingError(RuntimeError):
-    """Newton's method on the period map did not converge; ``history`` holds the scaled residuals."""
+    """Newton's method on the period map did not converge; ``history`` holds the scaled residuals.
+
+    ``least_tol`` is set (to a tolerance Newton's method can reach) where the residual stopped
+    falling at the level of the integration's rounding errors, below :data:`ROUNDING_LEVEL`:
+    the tolerance asked for is then below what the arithmetic gives, not the start far from
+    an orbit.
+    """
 
     def __init__(self, message: str, history: list, state: np.ndarray):
         super().__init__(message)
         self.history = history
         self.state = state
+        self.least_tol = None
+
+
+#: A scaled residual that stops falling below this has met the rounding errors of the integration (the bilinear pair's
+#: orbits stall between ``1e-13`` and ``8e-13``), not a start far from the orbit nor a gap of the discrete flow (whose
+#: stalls were measured at ``4e-6`` and above). Below the default ``tol``, which therefore never meets it.
+ROUNDING_LEVEL = 1e-11
+
+
+def _stalled(message: str, history: list, state: np.ndarray, tol: float) -> ShootingError:
+    """A :class:`ShootingError` with ``message``, saying so where the residual stalled at rounding's level."""
+    best = min(history)
+    if not best <= ROUNDING_LEVEL:
+        return ShootingError(message, history, state)
+    least = float(10.0 ** np.ceil(np.log10(10.0 * best)))
+    err = ShootingError(f"{message}. The residual stops falling at {best:.2g}, where the integration's rounding "
+                        f"errors leave it: tol = {tol:g} asks for less than the arithmetic gives; take tol = "
+                        f"{least:g} or more", history, state)
+    err.least_tol = least
+    return err
 
 
 @dataclass
@@ -263,8 +289,8 @@ def _newton(P, y, mode, scale, tol, max_iter, rel_step, history):
         if res <= tol:
             return y, mode_end
         if it == max_iter:
-            raise ShootingError(f"shooting did not converge in {max_iter} Newton steps: scaled residual "
-                                f"{res:.3g} > tol = {tol:g} (history: {_show(history)})", history, y)
+            raise _stalled(f"shooting did not converge in {max_iter} Newton steps: scaled residual "
+                           f"{res:.3g} > tol = {tol:g} (history: {_show(history)})", history, y, tol)
         J = P.jacobian(y, mode, scale, rel_step)   # only where not converged: a ring's replay is not cheap
         Js = (J - np.eye(n)) * scale[None, :] / scale[:, None]
         step = np.linalg.lstsq(Js, -r, rcond=None)[0] * scale
@@ -280,8 +306,8 @@ def _newton(P, y, mode, scale, tol, max_iter, rel_step, history):
                 pass
             lam *= 0.5
         else:
-            raise ShootingError(f"shooting stalled: no step along the Newton direction reduces the scaled "
-                                f"residual {res:.3g} (history: {_show(history)})", history, y)
+            raise _stalled(f"shooting stalled: no step along the Newton direction reduces the scaled "
+                           f"residual {res:.3g} (history: {_show(history)})", history, y, tol)
         y = y_try
 
 
