@@ -59,7 +59,7 @@ from .family import _Family
 from .period_map import FlowError, _copy, _key, kernel_mode
 from .self_overlap import NEAR, SelfOverlap, segment_ratios
 from .shooting import (ROUNDING_LEVEL, ShootingError, _n_coordinates, _scale_of_excursions,
-                       find_periodic_orbit, residual_size)
+                       find_periodic_orbit, residual_size, tolerance_above)
 
 
 def continuation(config, name: str, start: float, stop: float, *, periods: int = 1, guess=None, mode=None,
@@ -853,7 +853,7 @@ def _stalled(ds_min, name, value, ctx, steps_per_period) -> str:
     at ``tol = 1e-13`` from 280 rad/s, whose residuals stop between ``1e-13`` and ``8e-13``.
     """
     if ctx.rounding is not None:
-        least = float(10.0 ** np.ceil(np.log10(10.0 * ctx.rounding)))
+        least = tolerance_above(ctx.rounding)
         return (f"{STALLED} = {ds_min:g} at {name} = {value:.6g}: the residuals stop falling at "
                 f"{ctx.rounding:.2g} and above, where the integration's rounding errors leave them: tol = "
                 f"{ctx.tol:g} asks for less than the arithmetic gives; take tol (--tol) {least:g} or more "

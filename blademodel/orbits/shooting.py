@@ -31,12 +31,18 @@ class ShootingError(RuntimeError):
 ROUNDING_LEVEL = 1e-11
 
 
-def _stalled(message: str, history: list, state: np.ndarray, tol: float) -> ShootingError:
+def tolerance_above(residual: float) -> float:
+    """A tolerance that Newton's method reaches where residuals stop falling at ``residual`` (rounding's level): ten
+    times it, rounded up to a power of ten."""
+    return float(10.0 ** np.ceil(np.log10(10.0 * residual)))
+
+
+def _not_converged(message: str, history: list, state: np.ndarray, tol: float) -> ShootingError:
     """A :class:`ShootingError` with ``message``, saying so where the residual stalled at rounding's level."""
     best = min(history)
     if not best <= ROUNDING_LEVEL:
         return ShootingError(message, history, state)
-    least = float(10.0 ** np.ceil(np.log10(10.0 * best)))
+    least = tolerance_above(best)
     err = ShootingError(f"{message}. The residual stops falling at {best:.2g}, where the integration's rounding "
                         f"errors leave it: tol = {tol:g} asks for less than the arithmetic gives; take tol = "
                         f"{least:g} or more", history, state)
@@ -289,8 +295,8 @@ def _newton(P, y, mode, scale, tol, max_iter, rel_step, history):
         if res <= tol:
             return y, mode_end
         if it == max_iter:
-            raise _stalled(f"shooting did not converge in {max_iter} Newton steps: scaled residual "
-                           f"{res:.3g} > tol = {tol:g} (history: {_show(history)})", history, y, tol)
+            raise _not_converged(f"shooting did not converge in {max_iter} Newton steps: scaled residual "
+                                 f"{res:.3g} > tol = {tol:g} (history: {_show(history)})", history, y, tol)
         J = P.jacobian(y, mode, scale, rel_step)   # only where not converged: a ring's replay is not cheap
         Js = (J - np.eye(n)) * scale[None, :] / scale[:, None]
         step = np.linalg.lstsq(Js, -r, rcond=None)[0] * scale
@@ -306,8 +312,8 @@ def _newton(P, y, mode, scale, tol, max_iter, rel_step, history):
                 pass
             lam *= 0.5
         else:
-            raise _stalled(f"shooting stalled: no step along the Newton direction reduces the scaled "
-                           f"residual {res:.3g} (history: {_show(history)})", history, y, tol)
+            raise _not_converged(f"shooting stalled: no step along the Newton direction reduces the scaled "
+                                 f"residual {res:.3g} (history: {_show(history)})", history, y, tol)
         y = y_try
 
 
