@@ -28,6 +28,12 @@ also of the continuation with the period map differentiated by central differenc
 instead of its tangent. Every integrator after the first of a run is the first with its
 parameters changed (``with_parameters``), in the sweeps as in the continuation.
 
+Also measured (interleaved, at the branch's middle point): one recorded run of the period
+map as the continuation's residuals make it and one replay of its tangent; from them the
+ratio the continuation would have against the accuracy-matched fixed sweep if its time
+were only the kernel's work (its integrations and replays, nothing around them), and if
+every point took the least any can (two runs and a replay).
+
 Goal (the issue "Periodic orbits"): continuation at least 20 x cheaper than a sweep of
 the same resolution and accuracy.
 """
@@ -46,7 +52,7 @@ import _common as C  # noqa: E402
 from blademodel.config import apply_overrides  # noqa: E402
 from blademodel.zheng2022 import BladePair
 from blademodel.numeric.kernels import make_integrator  # noqa: E402
-from blademodel.orbits import continuation  # noqa: E402
+from blademodel.orbits import PeriodMap, continuation  # noqa: E402
 
 START, STOP, TOL = 250.0, 350.0, 1e-10
 MAX_PERIODS = 1000
@@ -74,6 +80,29 @@ class _Integrators:
 
 
 FIXED_TRANSIENT = 200
+
+
+def kernel_costs(cfg, branch, calls: int = 300, repeats: int = 3) -> tuple:
+    """Thread time of one recorded run of the period map (every step recorded and every event logged, as the
+    continuation's residuals run it, with the map's own Python) and of one replay of its tangent, at the branch's
+    middle point: ``(run, replay)`` in seconds, each the least over ``repeats`` interleaved means of ``calls``."""
+    k = len(branch.params) // 2
+    ig = _Integrators(cfg).at(float(branch.params[k]))
+    P = PeriodMap(ig, 1)
+    y, mode = branch.states[k].copy(), int(branch.modes[k][0])
+    ys = (y, y * (1.0 + 1e-12))   # two starts, so that no run is the map's kept last run
+
+    def runs():
+        for i in range(calls):
+            P.run(ys[i % 2], mode)
+
+    def replays():
+        P.run(y, mode)   # kept: each call below replays it
+        for _ in range(calls):
+            P.derivatives(y, mode)
+
+    times = C.interleaved({"run": runs, "replay": replays}, repeats)
+    return min(times["run"]) / calls, min(times["replay"]) / calls
 
 
 def by_fixed_sweep(cfg, values, transient=FIXED_TRANSIENT):
@@ -161,6 +190,12 @@ def main() -> int:
         # that fixed sweep, costed from the measured one (its cost is proportional to the periods integrated)
         t_u = t_f * (need + 1) / (FIXED_TRANSIENT + 1)
         t_d = min(times["differences"])
+        # the bound the kernel's own work sets: the branch's integrations and replays at their measured cost, and
+        # the least any continuation point can take (two runs, the residual at the prediction and one correction,
+        # and the replay for its multipliers), against the accuracy-matched fixed sweep, its cost a point
+        t_run, t_replay = kernel_costs(cfg, branch)
+        t_kernel = branch.integrations * t_run + branch.replays * t_replay
+        t_floor = len(branch.params) * (2 * t_run + t_replay)
         rows.append({"law": law, "points": len(values), "unstable": int(np.sum(~stable)),
                      "integrations": branch.integrations / len(branch.params),
                      "replays": branch.replays / len(branch.params),
@@ -169,7 +204,10 @@ def main() -> int:
                      "tangent_gain": t_d / t_c, "sweep_periods": periods, "rest_periods": periods_rest,
                      "fixed_periods": periods_fixed, "t_cont": t_c, "t_sweep": t_s, "t_rest": t_r,
                      "t_fixed": t_f, "ratio": t_s / t_c, "ratio_rest": t_r / t_c, "ratio_fixed": t_f / t_c,
-                     "uniform_transient": need, "t_uniform": t_u, "ratio_uniform": t_u / t_c})
+                     "uniform_transient": need, "t_uniform": t_u, "ratio_uniform": t_u / t_c,
+                     "t_run_us": 1e6 * t_run, "t_replay_us": 1e6 * t_replay, "t_kernel": t_kernel,
+                     "kernel_share": t_kernel / t_c, "bound_kernel": t_u / t_kernel,
+                     "bound_floor": t_u / t_floor})
         results[law] = {"omega": values, "harmonic_continuation": h_cont, "harmonic_sweep": h_sweep,
                         "harmonic_rest": h_rest, "harmonic_fixed": h_fixed, "stable": stable,
                         "special": [(p.kind, p.param) for p in branch.special]}
@@ -187,10 +225,17 @@ def main() -> int:
                          ("t_sweep", "adaptive s", ".2f"), ("t_rest", "from rest s", ".2f"), ("t_fixed", "fixed s", ".2f"),
                          ("ratio_fixed", "fixed / cont.", ".2f"), ("uniform_transient", "transient for the accuracy", "d"),
                          ("ratio_uniform", "that fixed sweep / cont.", ".2f"), ("ratio_rest", "from rest / cont.", ".2f"),
-                         ("ratio", "adaptive / cont.", ".2f"), ("tangent_gain", "differences / tangent", ".2f")]))
+                         ("ratio", "adaptive / cont.", ".2f"), ("tangent_gain", "differences / tangent", ".2f"),
+                         ("t_run_us", "a recorded run us", ".0f"), ("t_replay_us", "a replay us", ".0f"),
+                         ("kernel_share", "kernel work / cont.", ".2f"),
+                         ("bound_kernel", "bound: kernel work alone", ".1f"),
+                         ("bound_floor", "bound: 2 runs + 1 replay a point", ".1f")]))
     print("(H1 agreement over the stable points, largest and median; an unstable orbit is not what a sweep lands "
           "on. 'differences / tangent': the same continuation with the period map differentiated by central "
           "differences instead of its tangent)")
+    print("(bounds: the accuracy-matched fixed sweep against the branch's integrations and replays at the "
+          "measured cost of each and nothing else, and against two runs and a replay a point, the least a "
+          "continuation point takes; 'kernel work / cont.': the share of the continuation's time they are)")
     print("('transient for the accuracy': the periods the slowest point that settles needs from rest; a fixed "
           "sweep with that transient is costed from the measured 200-period one, its cost being proportional to "
           "the periods)")
