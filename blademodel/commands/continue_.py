@@ -305,16 +305,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"  vibration reduction P_d of {summed}: {np.nanmin(reduction):.4g} % to "
               f"{reduction[k]:.4g} % (the largest at {args.param} = {branch.params[k]:.8g}, "
               f"{'stable' if branch.stable[k] else 'unstable'})")
-    for p in branch.special:
-        if p.kind == "gap":
-            lo, hi = _distinct(*p.bracket)
-            print(f"  gap: no orbit found between {args.param} = {lo} and {hi}; the branch "
-                  f"goes on from the orbit at {p.param:.8g}, which may lie on another branch (more steps a period, "
-                  f"--steps-per-period, may close the gap)")
-            continue
-        within = "" if p.bracket is None else ", somewhere in [{}, {}]".format(*_distinct(*p.bracket))
-        print(f"  {p.kind} at {args.param} = {p.param:.8g}{within} ({_MULTIPLIER_IS.get(p.kind, 'multiplier')} "
-              f"{p.multiplier.real:.6g}{p.multiplier.imag:+.6g}i)")
+    for line in _special_lines(branch, args.param):
+        print(line)
     for what, switched_to in (("period doubling", doubled), ("branch point", branched)):
         for k, b in enumerate(switched_to, 1):
             if b is None:
@@ -322,12 +314,28 @@ def run(args: argparse.Namespace) -> int:
             print(f"{len(b.params)} period-{b.periods} orbits from the {what} {k}, {args.param} = "
                   f"{b.params.min():.6g} to {b.params.max():.6g} ({b.message}); {int(np.sum(~b.stable))} unstable"
                   f"{_run_again(b, args.param)}")
-            for p in b.special:
-                print(f"  {p.kind} at {args.param} = {p.param:.8g}")
+            for line in _special_lines(b, args.param):
+                print(line)
     for what, name in (("saved", args.out), ("saved", ", ".join(doubled_files)), ("plotted", args.plot)):
         if name:
             print(f"{what} {name}")
     return 0
+
+
+def _special_lines(branch, param: str) -> list[str]:
+    """The report's line for each special point of ``branch``, in their order along it."""
+    lines = []
+    for p in branch.special:
+        if p.kind == "gap":
+            lo, hi = _distinct(*p.bracket)
+            lines.append(f"  gap: no orbit found between {param} = {lo} and {hi}; the branch goes on from the orbit "
+                         f"at {p.param:.8g}, which may lie on another branch (more steps a period, "
+                         f"--steps-per-period, may close the gap)")
+            continue
+        within = "" if p.bracket is None else ", somewhere in [{}, {}]".format(*_distinct(*p.bracket))
+        lines.append(f"  {p.kind} at {param} = {p.param:.8g}{within} ({_MULTIPLIER_IS.get(p.kind, 'multiplier')} "
+                     f"{p.multiplier.real:.6g}{p.multiplier.imag:+.6g}i)")
+    return lines
 
 
 def _distinct(lo: float, hi: float) -> tuple[str, str]:
