@@ -86,14 +86,18 @@ def test_special_points_are_listed_along_the_branch(pd_branch, capsys):
     pd = b.points("period-doubling")[0]
     assert any(q.kind == "grazing" and q.index == pd.index and q.param < pd.param for q in b.special)
     yaml = str(Path(__file__).resolve().parent.parent / "models" / "blade_pair_bilinear.yaml")
-    assert main(["continue", yaml, "--param", "gamma", "--from", "7.2", "--to", "7.5"]) == 0
-    lines = [s.strip() for s in capsys.readouterr().out.splitlines()
+    assert main(["continue", yaml, "--param", "gamma", "--from", "7.2", "--to", "7.5", "--switch"]) == 0
+    out = capsys.readouterr().out
+    first, doubled = out.split("orbits from the period doubling 1")
+    lines = [s.strip() for s in first.splitlines()
              if s.startswith("  ") and s.split(" at gamma = ")[0].strip() in {p.kind for p in b.special}]
     kinds = [s.split(" at ")[0] for s in lines]
     values = [float(s.split(" at gamma = ")[1].split()[0].rstrip(",")) for s in lines]
     assert "period-doubling" in kinds and "grazing" in kinds and values == sorted(values)
-    for s, kind in zip(lines, kinds):
-        said = "(largest multiplier at the branch's point before it: " if kind == "grazing" else "(multiplier "
+    switched = [s.strip() for s in doubled.splitlines() if s.startswith("  ") and " at gamma = " in s]
+    assert any(s.startswith("grazing") for s in switched) and any(s.startswith("fold") for s in switched)
+    for s in lines + switched:   # the branch switched to at the doubling reported as the branch is
+        said = "(largest multiplier at the branch's point before it: " if s.startswith("grazing") else "(multiplier "
         assert said in s
 
 
