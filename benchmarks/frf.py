@@ -190,9 +190,9 @@ def main() -> int:
         # that fixed sweep, costed from the measured one (its cost is proportional to the periods integrated)
         t_u = t_f * (need + 1) / (FIXED_TRANSIENT + 1)
         t_d = min(times["differences"])
-        # the bound the kernel's own work sets: the branch's integrations and replays at their measured cost, and
-        # the least any continuation point can take (two runs, the residual at the prediction and one correction,
-        # and the replay for its multipliers), against the accuracy-matched fixed sweep, its cost a point
+        # the bounds the kernel's own work sets against the accuracy-matched fixed sweep: the branch's integrations
+        # and replays at their measured cost, and the least any continuation point can take (two runs, the residual
+        # at the prediction and one correction, and the replay for its multipliers)
         t_run, t_replay = kernel_costs(cfg, branch)
         t_kernel = branch.integrations * t_run + branch.replays * t_replay
         t_floor = len(branch.params) * (2 * t_run + t_replay)
