@@ -1019,3 +1019,20 @@ def test_the_branch_plot_gives_each_of_many_branches_its_own_colours():
     assert len(colours) == 7 and all(len(c) == 2 for c in colours.values())
     every = [c for pair in colours.values() for c in pair]
     assert len(set(every)) == len(every)   # no colour drawn for two branches, nor for stable and unstable alike
+
+
+def test_a_branch_and_an_orbit_print_as_summaries(pd_branch):
+    """In a notebook a branch, its special points and an orbit print as what a reader looks for, not as their arrays
+    (a branch's default dataclass form ran to tens of kilobytes)."""
+    b = pd_branch
+    text = repr(b)
+    unstable = int(np.sum(~b.stable))
+    assert len(text) < 400 and text.startswith("Branch(gamma from 6.5 to ")
+    assert f"{len(b.params)} period-1 orbits, {unstable} unstable" in text and b.message in text
+    assert f"{len(b.points('grazing'))} grazing" in text and "1 period-doubling" in text
+    pd = b.points("period-doubling")[0]
+    assert repr(pd) == (f"SpecialPoint(kind='period-doubling', param={pd.param:.10g}, "
+                        f"multiplier={pd.multiplier.real:.6g}{pd.multiplier.imag:+.6g}j, index={pd.index})")
+    orbit = find_periodic_orbit(BladePair(friction="bilinear").build())
+    mu = orbit.largest_multiplier
+    assert len(repr(orbit)) < 200 and f"|mu| = {abs(mu):.6g}" in repr(orbit) and "stable" in repr(orbit)

@@ -67,6 +67,13 @@ class SpecialPoint:
     mode: object = None
     bracket: tuple | None = None
 
+    def __repr__(self) -> str:
+        # what a reader looks for; the state and the mode are attributes to ask for
+        within = "" if self.bracket is None else f", bracket=({self.bracket[0]:.10g}, {self.bracket[1]:.10g})"
+        mu = complex(self.multiplier)
+        return (f"SpecialPoint(kind={self.kind!r}, param={float(self.param):.10g}, "
+                f"multiplier={mu.real:.6g}{mu.imag:+.6g}j, index={self.index}{within})")
+
 
 @dataclass
 class Branch:
@@ -146,6 +153,20 @@ class Branch:
     def points(self, kind: str) -> list:
         """The special points of one kind."""
         return [p for p in self.special if p.kind == kind]
+
+    def __repr__(self) -> str:
+        # a summary: the arrays (thousands of numbers on an FRF) are attributes to ask for
+        n = len(self.params)
+        if n == 0:
+            return f"Branch({self.field}: no points; {self.message})"
+        kinds = {}
+        for p in self.special:
+            kinds[p.kind] = kinds.get(p.kind, 0) + 1
+        special = ", ".join(f"{k} {kind}" for kind, k in kinds.items()) or "none"
+        ended = self.message if self.complete else f"unfinished: {self.message}"
+        return (f"Branch({self.field} from {self.params[0]:.6g} to {self.params[-1]:.6g}: {n} period-{self.periods} "
+                f"orbits, {int(np.sum(~np.asarray(self.stable, dtype=bool)))} unstable; special points: {special}; "
+                f"{ended})")
 
 
 class ContinuationInterrupted(KeyboardInterrupt):

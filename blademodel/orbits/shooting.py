@@ -92,6 +92,13 @@ class PeriodicOrbit:
     t: np.ndarray = field(repr=False)
     y: np.ndarray = field(repr=False)
 
+    def __repr__(self) -> str:
+        # a summary: the state, the monodromy and the sampled orbit are attributes to ask for
+        mu = self.largest_multiplier
+        return (f"PeriodicOrbit(period-{self.periods}, {'stable' if self.stable else 'unstable'}, largest multiplier "
+                f"{mu.real:.6g}{mu.imag:+.6g}j (|mu| = {abs(mu):.6g}), residual {self.residual:.2g}, "
+                f"{len(self.state)} states, T = {self.period:.6g} s)")
+
     @property
     def stable(self) -> bool:
         """All multipliers inside the unit circle."""
