@@ -150,7 +150,7 @@ def test_the_orbit_command(capsys):
 
 
 def test_a_tolerance_below_rounding_is_named_as_such(capsys):
-    """Asked for a residual below what the arithmetic gives (the bilinear pair's orbits stall between 1e-13 and
+    """Asked for a residual below what the arithmetic gives (the bilinear pair's orbits stall between 9e-14 and
     8e-13), shooting and continuation say that ``tol`` is what stops them and what tolerance to take, not that the
     start is far from an orbit or that more steps a period may get through; a start far from any orbit (the chaotic
     pair at gamma = 10, two Newton steps) is not put down to rounding."""

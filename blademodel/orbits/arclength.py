@@ -58,8 +58,8 @@ from .corrector import _Context, _at_kink, _field_bracket, _off_circle, _special
 from .family import _Family
 from .period_map import FlowError, _copy, _key, kernel_mode
 from .self_overlap import NEAR, SelfOverlap, segment_ratios
-from .shooting import (ROUNDING_LEVEL, ShootingError, _n_coordinates, _scale_of_excursions,
-                       find_periodic_orbit, residual_size, tolerance_above)
+from .shooting import (ROUNDING_LEVEL, ShootingError, _n_coordinates, _scale_of_excursions, below_rounding,
+                       find_periodic_orbit, residual_size)
 
 
 def continuation(config, name: str, start: float, stop: float, *, periods: int = 1, guess=None, mode=None,
@@ -430,9 +430,7 @@ def _along_branch(special: list, pts: list, ctx) -> list:
         i = p.index
         if i + 1 >= len(pts):
             return i, 0.0
-        a, b, x = (np.append(np.asarray(q[0])[:ctx.n] / ctx.scale, q[1] / ctx.span)
-                   for q in ((pts[i]["state"], pts[i]["param"]), (pts[i + 1]["state"], pts[i + 1]["param"]),
-                             (p.state, p.param)))
+        a, b, x = (ctx.unknowns(q) for q in (pts[i], pts[i + 1], {"state": p.state, "param": p.param}))
         chord = b - a
         length = float(chord @ chord)
         return i, (float((x - a) @ chord) / length if length > 0.0 else 0.0)
@@ -850,14 +848,10 @@ def _stalled(ds_min, name, value, ctx, steps_per_period) -> str:
     run from 290.8 to 290.95 stops at 290.936 instead); the Coulomb pair has such a gap at
     305.78 rad/s. Where the last attempts' residuals stopped falling at the integration's
     rounding errors (``ctx.rounding``), ``tol`` is what stops the branch: the bilinear pair
-    at ``tol = 1e-13`` from 280 rad/s, whose residuals stop between ``1e-13`` and ``8e-13``.
+    at ``tol = 1e-13`` from 280 rad/s, whose residuals stop between ``9e-14`` and ``8e-13``.
     """
     if ctx.rounding is not None:
-        least = tolerance_above(ctx.rounding)
-        return (f"{STALLED} = {ds_min:g} at {name} = {value:.6g}: the residuals stop falling at "
-                f"{ctx.rounding:.2g} and above, where the integration's rounding errors leave them: tol = "
-                f"{ctx.tol:g} asks for less than the arithmetic gives; take tol (--tol) {least:g} or more "
-                f"({ctx.why})")
+        return f"{STALLED} = {ds_min:g} at {name} = {value:.6g}: {below_rounding(ctx.rounding, ctx.tol)} ({ctx.why})"
     return (f"{STALLED} = {ds_min:g} at {name} = {value:.6g}: {ctx.why} (the integrator's discrete "
             f"flow may lack orbits over a short stretch, which moves with the step: more steps a period, "
             f"steps_per_period (--steps-per-period) {2 * steps_per_period} instead of {steps_per_period}, may get "

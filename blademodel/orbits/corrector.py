@@ -278,7 +278,7 @@ class _Context:
             try:
                 G = np.vstack([A, T]) if chord else None
                 X_old = F_old = None
-                res_old = best = np.inf
+                res_old = np.inf
                 halvings = since_best = 0
                 for it in range(2 * self.max_corrections if chord else self.max_corrections):
                     r, mode_end = self.residual(Xc, mode)
