@@ -98,7 +98,7 @@ def test_the_plot_draws_the_values_given_for_the_reduction():
     pd = branch_vibration_reduction(b, cfg)
     fig = branch_figure(b, "x1, y1", quantity="reduction", values=[pd])
     ax = fig.axes[0]
-    drawn = [line for line in ax.lines if len(line.get_xdata()) == 2]
+    drawn = [line for line in ax.lines if len(line.get_xdata()) > 1 and line.get_linewidth() == 1.6]
     ys = np.concatenate([line.get_ydata() for line in drawn])
     assert set(np.round(ys, 12)) == set(np.round(pd, 12)) and "P_d" in ax.get_ylabel()
     with pytest.raises(ValueError, match="P_d in values"):

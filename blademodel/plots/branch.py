@@ -24,6 +24,32 @@ def _between(value, x, y, k):
     return y[k] + s * (y[k1] - y[k])
 
 
+def stability_runs(stable, gaps=()):
+    """The branch's runs of segments drawn alike: ``(first point, last point, solid)`` each.
+
+    The segment from point ``k`` to ``k + 1`` is solid where both its ends are stable and
+    dashed otherwise; none is drawn from a point in ``gaps`` (no orbit was found beyond it).
+    Each run is drawn as one line: a dash pattern restarts at every line, so segments drawn
+    one by one, shorter than a dash (a dense branch), showed an unstable stretch solid.
+    """
+    runs, start = [], None
+    for k in range(len(stable) - 1):
+        solid = bool(stable[k] and stable[k + 1])
+        if k in gaps:
+            if start is not None:
+                runs.append((start, k, runs_solid))
+            start = None
+            continue
+        if start is not None and solid != runs_solid:
+            runs.append((start, k, runs_solid))
+            start = None
+        if start is None:
+            start, runs_solid = k, solid
+    if start is not None:
+        runs.append((start, len(stable) - 1, runs_solid))
+    return runs
+
+
 #: Beyond this many grazing points on a branch (a mistuned ring's contacts graze one by one) their markers are small.
 CROWDED = 40
 
@@ -98,12 +124,9 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
         stable = b.stable
         gaps = {p.index for p in b.special if p.kind == "gap"}   # no orbit was found there: no line
         for yc in curves:
-            for k in range(len(x) - 1):   # each segment drawn as its end points' stability: solid or dashed
-                if k in gaps:
-                    continue
-                both = stable[k] and stable[k + 1]
-                ax.plot(x[k:k + 2], yc[k:k + 2], "-" if both else "--", color=c_stable if both else c_unstable,
-                        lw=1.6)
+            for first_point, last_point, solid in stability_runs(stable, gaps):
+                ax.plot(x[first_point:last_point + 1], yc[first_point:last_point + 1], "-" if solid else "--",
+                        color=c_stable if solid else c_unstable, lw=1.6)
         tag = f"{labels[j]}, " if labels is not None else f"period {b.periods}, " if len(branches) > 1 else ""
         tag += f"largest of {state}, " if several else ""
         ax.plot([], [], "-", color=c_stable, label=f"{tag}stable")
