@@ -184,7 +184,7 @@ def test_a_branch_counts_the_integrations_it_made(monkeypatch):
     assert b.integrations == calls[0] - first
 
 
-def test_the_continue_command(tmp_path, capsys):
+def test_the_continue_command(tmp_path, capsys, monkeypatch):
     """``blademodel continue``: the JSON report, the files and the plot, with the branch switched to at the period
     doubling (``--switch``) saved beside the first; a missing field is named."""
     import json
@@ -208,6 +208,26 @@ def test_the_continue_command(tmp_path, capsys):
     assert "no field 'no_such_field'" in capsys.readouterr().err
     assert main(["continue", yaml, "--param", "gamma", "--from", "7.2", "--to", "7.5", "--tol", "0"]) == 2
     assert "--tol must be > 0, got 0.0" in capsys.readouterr().err
+    _replotted_with_its_switched_branch(tmp_path, out, rep, monkeypatch)
+
+
+def _replotted_with_its_switched_branch(tmp_path, out, rep, monkeypatch):
+    """``blademodel plot`` of the branch file draws the branch switched to in the same run with it, labelled as
+    ``continue --plot`` labels it; files named like switched branches but not of this run are left out (a copy
+    of the doubled branch under another number, the main branch under a switched branch's name)."""
+    import shutil
+
+    import blademodel.plots.branch as plots
+    from blademodel.cli import main
+    shutil.copy(tmp_path / "b_pd1.nc", tmp_path / "b_pd2.nc")
+    shutil.copy(out, tmp_path / "b_pd3.nc")
+    drawn, figure = [], plots.branch_figure
+    monkeypatch.setattr(plots, "branch_figure", lambda b, *a, **kw: drawn.append((b, kw)) or figure(b, *a, **kw))
+    assert main(["plot", str(out)]) == 0
+    (branches, kw), (reduced, kw_reduced) = drawn
+    assert [b.periods for b in branches] == [1, 2] and kw["labels"] == ["period 1", "doubled at 1"]
+    assert list(branches[1].params) == rep["doubled"][0]["values"]
+    assert len(reduced) == 2 and kw_reduced["quantity"] == "reduction" and kw_reduced["labels"] == kw["labels"]
 
 
 def _den_hartog(omega, m=0.085, k=1e5, F0=60.0, muN=10.0):

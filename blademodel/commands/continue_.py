@@ -23,6 +23,7 @@ from . import jsonout
 from .common import (add_jacobian_arguments, add_model_arguments, add_stepping_arguments, check_at_least_one,
                      config_and_model)
 from .output import check_output_file
+from .plot import SWITCHED
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -253,9 +254,9 @@ def run(args: argparse.Namespace) -> int:
                                    cyclic=args.cyclic, crossed=branch, **shared, **kw)
 
     if args.switch:
-        doubled = switch_at(branch.points("period-doubling"), "pd", "doubling", "period-doubled branch",
+        doubled = switch_at(branch.points("period-doubling"), "pd", SWITCHED["pd"][0], "period-doubled branch",
                             "period doubling", switched)
-        branched = switch_at(branch.points("branch-point"), "bp", "branch_point", "branch from branch point",
+        branched = switch_at(branch.points("branch-point"), "bp", SWITCHED["bp"][0], "branch from branch point",
                              "branch point", crossing)
     state = args.state or branch.state_names[0]
     idx = state_indices(branch.state_names, state, "--state")
@@ -267,8 +268,8 @@ def run(args: argparse.Namespace) -> int:
         if args.overlay:
             overlay = sweep_overlay(args.overlay, args.param, idx, getattr(config, "friction", None), args.quantity)
         drawn = [(branch, f"period {branch.periods}")]
-        drawn += [(b, f"doubled at {k}") for k, b in enumerate(doubled, 1) if b is not None]
-        drawn += [(b, f"crossing at branch point {k}") for k, b in enumerate(branched, 1) if b is not None]
+        for tag, switched_to in (("pd", doubled), ("bp", branched)):
+            drawn += [(b, SWITCHED[tag][1].format(k=k)) for k, b in enumerate(switched_to, 1) if b is not None]
         values = None
         if args.quantity == "reduction":
             if reduction is None:

@@ -40,7 +40,8 @@ def plot_branch(path: Path, out_dir=None, state: str | None = None) -> list[Path
     """The forced response (first harmonic of ``state``, a name or a pattern; default the first coordinate) of a
     branch file, ``<stem>_branch.png``, and its vibration reduction ``P_d``, ``<stem>_reduction.png`` (where the
     file keeps its orbits' mean squares and its config, and the model without contacts has a closed-form steady
-    state)."""
+    state). The branches ``blademodel continue --switch`` saved beside it (``<stem>_pd1.nc``, ...,
+    ``<stem>_bp1.nc``, ...: :func:`switched_files`) are drawn with it, as ``continue --plot`` drew them."""
     import matplotlib.pyplot as plt
 
     from ..orbits.branch_file import branch_origin, load_branch
@@ -52,19 +53,63 @@ def plot_branch(path: Path, out_dir=None, state: str | None = None) -> list[Path
     from ..orbits.branch_states import state_indices
     state = state or branch.state_names[0]
     state_indices(branch.state_names, state, "--state")   # a bad name is named before anything is drawn
-    fig = branch_figure(branch, state)
+    drawn = [(branch, path)] + [(load_branch(f), f) for f in switched_files(path)]
+    labels = None
+    if len(drawn) > 1:
+        labels = [f"period {branch.periods}"] + [switched_label(f) for _, f in drawn[1:]]
+    fig = branch_figure([b for b, _ in drawn], state, labels=labels)
     out = folder / f"{path.stem}_branch.png"
     fig.savefig(out, dpi=120)
     plt.close(fig)
     written = [out]
-    reduction = _branch_reduction(config, branch, path)
-    if reduction is not None:
-        names, values = reduction
-        fig = branch_figure(branch, names, quantity="reduction", values=[values])
+    reductions = [_branch_reduction(config, b, f) for b, f in drawn]
+    if reductions[0] is not None:
+        kept = [(b, r[1], label) for (b, _), r, label in zip(drawn, reductions, labels or [None] * len(drawn))
+                if r is not None]
+        fig = branch_figure([b for b, _, _ in kept], reductions[0][0], quantity="reduction",
+                            values=[v for _, v, _ in kept], labels=[x for _, _, x in kept] if labels else None)
         written.append(folder / f"{path.stem}_reduction.png")
         fig.savefig(written[-1], dpi=120)
         plt.close(fig)
     return written
+
+
+#: The file names ``blademodel continue --switch`` gives the branches it switched to beside ``--out FILE.nc``:
+#: FILE_pd<k>.nc (born at the k-th period doubling) and FILE_bp<k>.nc (crossing at the k-th branch point).
+SWITCHED = {"pd": ("doubling", "doubled at {k}"), "bp": ("branch_point", "crossing at branch point {k}")}
+
+
+def switched_files(path: Path) -> list[Path]:
+    """The branch files ``blademodel continue --switch`` saved beside the branch file ``path`` (doubled ones first,
+    each kind by its number): named after it (:data:`SWITCHED`), switched from the same config in the same field
+    (their ``run`` settings name the doubling or branch point); none for a switched branch's own file."""
+    import glob
+    import re
+
+    from ..orbits.branch_file import branch_origin
+    run, config = branch_origin(path)
+    if run is None or any(key in run for key, _ in SWITCHED.values()):
+        return []
+    found = []
+    for j, (tag, (key, _)) in enumerate(SWITCHED.items()):
+        for f in path.parent.glob(f"{glob.escape(path.stem)}_{tag}*.nc"):
+            m = re.fullmatch(rf"{re.escape(path.stem)}_{tag}([1-9][0-9]*)\.nc", f.name)
+            if m is None:
+                continue
+            their_run, their_config = branch_origin(f)
+            if their_run is None or their_run.get(key) != int(m.group(1)) or their_config != config:
+                continue
+            if {k: v for k, v in their_run.items() if k != key} != run:
+                continue
+            found.append((j, int(m.group(1)), f))
+    return [f for _, _, f in sorted(found)]
+
+
+def switched_label(path: Path) -> str:
+    """A switched branch's label in the figure, from its file's name (as ``continue --plot`` labels it)."""
+    import re
+    m = re.search(r"_(pd|bp)([0-9]+)\.nc$", path.name)
+    return SWITCHED[m.group(1)][1].format(k=int(m.group(2)))
 
 
 def _branch_reduction(data: dict | None, branch, path: Path) -> tuple | None:
