@@ -984,6 +984,27 @@ def test_a_mistuned_ring_s_wrong_turn_at_a_nonsmooth_fold_is_taken_again_and_rig
     assert b.params.max() < 252.854 and b.params[-1] < 250.0
 
 
+def test_a_branch_ends_on_the_end_of_its_range(monkeypatch):
+    """A branch asked to end at ``gamma = 9`` ends on 9, not at its first point past it (it ended at 9.048, and the
+    plot's axis ran past the range): the step whose prediction passes the end shoots at the end's value. Its last
+    orbit is the one shooting finds at 9 from it, and its points before are those of the branch that ends past 9
+    (the shot at the end left out), to the bit: only the last step is another."""
+    from blademodel.orbits import arclength
+    cfg = BladePair(friction="bilinear")
+    b = continuation(cfg, "gamma", 6.0, 9.0, workers=1)
+    landing = arclength._end_landing
+    monkeypatch.setattr(arclength, "_end_landing", lambda *a: (None,) * 3 if landing(*a)[2] else landing(*a))
+    further = continuation(cfg, "gamma", 6.0, 9.0, workers=1)
+    assert b.params[-1] == 9.0 and np.all(b.params[:-1] < 9.0) and b.message == "reached gamma = 9"
+    n = len(b.params) - 1
+    assert further.params[n] > 9.0 and np.array_equal(further.states[:n], b.states[:n])
+    orbit = find_periodic_orbit(BladePair(friction="bilinear", gamma=9.0).build(), guess=b.states[-1],
+                                transient=0, workers=1)
+    scale = np.max(np.abs(b.states), axis=0)
+    assert np.max(np.abs(b.states[-1] - orbit.state) / scale) < 1e-9 and b.residuals[-1] <= 1e-10
+    assert [p.param for p in b.special] == [p.param for p in further.special if p.param < 9.0]
+
+
 def test_a_branch_lands_on_the_end_of_the_range_where_the_field_takes_no_values_past_it():
     """``mu`` takes no value below 0. Continued down to 0, the Coulomb pair's branch used to crawl toward it in ever
     shorter steps (its corrections stepped past 0, where no model can be built) and stall at ``mu = 6e-8`` saying

@@ -82,8 +82,9 @@ def continuation(config, name: str, start: float, stop: float, *, periods: int =
         The range; the branch starts at ``start`` and ends when the field leaves the range
         (it may turn back at folds in between), or earlier where it cannot go on or runs onto
         points it already has (a retrace, a closed branch): its ``message`` says which. Both
-        must be values the config takes (``ValueError`` otherwise); where it takes none past an
-        end (``mu`` below 0), the branch's last point lies on that end exactly.
+        must be values the config takes (``ValueError`` otherwise). The branch's last point lies on
+        the end it reaches exactly (an orbit shot at the end's value), unless that shot fails where
+        the field takes values past the end: the last point is then the first past it.
     periods : int
         Period of the orbits in excitation periods.
     guess, mode, transient
@@ -485,12 +486,17 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     retaken = []        # (where, the shorter ds_max) of each wrong turn taken again (:func:`_before_the_turn`)
     while earlier + len(pts) < max_points:
         X_pred, A_pred = ctx.predict(pts, X, T, A, h)
-        landed, X_end = _end_landing(ctx, X, X_pred, bounds)
+        landed, X_end, beyond = _end_landing(ctx, X, X_pred, bounds)
+        X_new = None
         if landed is not None:
-            # the field takes no values past this end of the range (mu below 0): corrections there cannot be
-            # built, so the branch lands on the end itself, shooting at its value
+            # the prediction passes an end of the range: the branch lands on the end itself, shooting at its
+            # value. Where the field takes no values past it (mu below 0) corrections there cannot be built;
+            # where it does, a shot that fails or lands off the step (the branch turns before the end) leaves
+            # the step to the arclength correction, and the branch ends at its first point past the end
             X_new, m_new, A_new = ctx.correct_at_value(X_end, m)
-        else:
+            if beyond and X_new is not None and np.linalg.norm(X_new - X_end) > h:
+                X_new = None
+        if X_new is None and (landed is None or beyond):
             X_new, m_new, A_new = ctx.correct(X_pred, T, m, A_pred, column=ctx.column_rule(pts))
         if X_new is not None and np.linalg.norm(X_new - X_pred) > ds_max and _passed(ctx, pts[:-2], X_new, h):
             # Newton's method wandered off and converged on the part of the branch already passed
@@ -689,20 +695,17 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
 
 
 def _end_landing(ctx, X, X_pred, bounds) -> tuple:
-    """``(end, X_end)`` where the prediction ``X_pred`` from ``X`` passes an end of the range ``bounds`` into values
-    the field does not take: that end, and the unknowns where the prediction's line meets it (to shoot from);
-    else ``(None, None)``.
-
-    Past an end the field does take, the branch ends at its first point past it, as before.
-    """
+    """``(end, X_end, beyond)`` where the prediction ``X_pred`` from ``X`` passes an end of the range ``bounds``:
+    that end, the unknowns where the prediction's line meets it (to shoot from), and whether the field takes
+    values past it; else ``(None, None, None)``."""
     lam = X_pred[-1] * ctx.span
     for end, outward in ((max(bounds), 1.0), (min(bounds), -1.0)):
-        if (lam - end) * outward > 0 and not ctx.fam.admits(lam):
+        if (lam - end) * outward > 0 and (X[-1] * ctx.span - end) * outward < 0:
             x_end = end / ctx.span
             X_end = X + (x_end - X[-1]) / (X_pred[-1] - X[-1]) * (X_pred - X)
             X_end[-1] = x_end
-            return end, X_end
-    return None, None
+            return end, X_end, bool(ctx.fam.admits(lam))
+    return None, None, None
 
 
 #: How many times a branch that turned back onto itself (a wrong turn at a kink) goes back before the turn with its
