@@ -53,10 +53,9 @@ def plot_branch(path: Path, out_dir=None, state: str | None = None) -> list[Path
     from ..orbits.branch_states import state_indices
     state = state or branch.state_names[0]
     state_indices(branch.state_names, state, "--state")   # a bad name is named before anything is drawn
-    drawn = [(branch, path)] + [(load_branch(f), f) for f in switched_files(path)]
-    labels = None
-    if len(drawn) > 1:
-        labels = [f"period {branch.periods}"] + [switched_label(f) for _, f in drawn[1:]]
+    switched = switched_files(path)
+    drawn = [(branch, path)] + [(load_branch(f), f) for f, _ in switched]
+    labels = [f"period {branch.periods}"] + [label for _, label in switched] if switched else None
     fig = branch_figure([b for b, _ in drawn], state, labels=labels)
     out = folder / f"{path.stem}_branch.png"
     fig.savefig(out, dpi=120)
@@ -79,10 +78,11 @@ def plot_branch(path: Path, out_dir=None, state: str | None = None) -> list[Path
 SWITCHED = {"pd": ("doubling", "doubled at {k}"), "bp": ("branch_point", "crossing at branch point {k}")}
 
 
-def switched_files(path: Path) -> list[Path]:
-    """The branch files ``blademodel continue --switch`` saved beside the branch file ``path`` (doubled ones first,
-    each kind by its number): named after it (:data:`SWITCHED`), switched from the same config in the same field
-    (their ``run`` settings name the doubling or branch point); none for a switched branch's own file."""
+def switched_files(path: Path) -> list[tuple[Path, str]]:
+    """The branch files ``blademodel continue --switch`` saved beside the branch file ``path``, each with its label
+    in a figure (doubled ones first, each kind by its number): named after it (:data:`SWITCHED`), switched in the
+    same run (their ``run`` settings are its own with the doubling or branch point named, their config its own);
+    none for a switched branch's own file."""
     import glob
     import re
 
@@ -91,25 +91,13 @@ def switched_files(path: Path) -> list[Path]:
     if run is None or any(key in run for key, _ in SWITCHED.values()):
         return []
     found = []
-    for j, (tag, (key, _)) in enumerate(SWITCHED.items()):
+    for j, (tag, (key, label)) in enumerate(SWITCHED.items()):
         for f in path.parent.glob(f"{glob.escape(path.stem)}_{tag}*.nc"):
             m = re.fullmatch(rf"{re.escape(path.stem)}_{tag}([1-9][0-9]*)\.nc", f.name)
-            if m is None:
-                continue
-            their_run, their_config = branch_origin(f)
-            if their_run is None or their_run.get(key) != int(m.group(1)) or their_config != config:
-                continue
-            if {k: v for k, v in their_run.items() if k != key} != run:
-                continue
-            found.append((j, int(m.group(1)), f))
-    return [f for _, _, f in sorted(found)]
-
-
-def switched_label(path: Path) -> str:
-    """A switched branch's label in the figure, from its file's name (as ``continue --plot`` labels it)."""
-    import re
-    m = re.search(r"_(pd|bp)([0-9]+)\.nc$", path.name)
-    return SWITCHED[m.group(1)][1].format(k=int(m.group(2)))
+            their_run, their_config = branch_origin(f) if m else (None, None)
+            if their_run is not None and their_config == config and their_run == {**run, key: int(m.group(1))}:
+                found.append((j, int(m.group(1)), f, label.format(k=int(m.group(1)))))
+    return [(f, label) for _, _, f, label in sorted(found)]
 
 
 def _branch_reduction(data: dict | None, branch, path: Path) -> tuple | None:
