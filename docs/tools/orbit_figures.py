@@ -21,7 +21,7 @@ from matplotlib.figure import Figure  # noqa: E402
 from blademodel.config import apply_overrides, load_config  # noqa: E402
 from blademodel.zheng2022 import BladePair
 from blademodel.orbits import branch_point_branch, continuation, period_doubled_branch  # noqa: E402
-from blademodel.plots.branch import branch_figure  # noqa: E402
+from blademodel.plots.branch import branch_figure, stability_runs  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "figures"
 
@@ -224,9 +224,9 @@ def branch_points_ring():
     ax.set_xlabel("ω (rad/s)")
     ax.legend(fontsize=6)
     ax = fig.add_subplot(1, 2, 2)
-    for k in range(len(c.params) - 1):
-        both = c.stable[k] and c.stable[k + 1]
-        ax.plot(c.params[k:k + 2], spread(c.harmonics[k:k + 2]), "-" if both else "--", color="C2" if both else "C1")
+    for first, last, solid in stability_runs(c.stable):
+        ax.plot(c.params[first:last + 1], spread(c.harmonics[first:last + 1]), "-" if solid else "--",
+                color="C2" if solid else "C1")
     ax.plot(b.params, spread(b.harmonics), "-", color="C0", lw=1, label="travelling waves (all blades alike)")
     ax.plot(*zip(*rest), "o", color="k", mfc="none", ms=5, label="integration from rest, 400 periods")
     ax.plot([], [], "-", color="C2", label="crossing, stable")
