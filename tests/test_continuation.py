@@ -75,7 +75,8 @@ def test_a_period_doubling_of_the_bilinear_pair_in_gamma(pd_branch):
 def test_special_points_are_listed_along_the_branch(pd_branch, capsys):
     """A step's special points are found by kind (changes of stability first, grazing points after them); the
     branch lists them along the branch, and the command prints them so, each multiplier said for what it is (a
-    grazing point's is that of the branch's point before it, not of an orbit at the grazing)."""
+    grazing point's is that of the branch's point before it, not of an orbit at the grazing), and counts them by kind
+    above the list."""
     from pathlib import Path
 
     from blademodel.cli import main
@@ -94,6 +95,9 @@ def test_special_points_are_listed_along_the_branch(pd_branch, capsys):
     kinds = [s.split(" at ")[0] for s in lines]
     values = [float(s.split(" at gamma = ")[1].split()[0].rstrip(",")) for s in lines]
     assert "period-doubling" in kinds and "grazing" in kinds and values == sorted(values)
+    # counted by kind above the list, so that the doubling is not lost among the grazing points
+    counted = first.split("  special points: ")[1].split(", in their order along the branch:")[0]
+    assert counted == ", ".join(f"{kinds.count(k)} {k}" for k in dict.fromkeys(kinds))
     switched = [s.strip() for s in doubled.splitlines() if s.startswith("  ") and " at gamma = " in s]
     assert any(s.startswith("grazing") for s in switched) and any(s.startswith("fold") for s in switched)
     for s in lines + switched:   # the branch switched to at the doubling reported as the branch is

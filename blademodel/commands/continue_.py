@@ -306,6 +306,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"  vibration reduction P_d of {summed}: {np.nanmin(reduction):.4g} % to "
               f"{reduction[k]:.4g} % (the largest at {args.param} = {branch.params[k]:.8g}, "
               f"{'stable' if branch.stable[k] else 'unstable'})")
+    if len(branch.special) > 1:   # the bifurcations are not lost among many grazing points
+        print(f"  special points: {branch.special_counts()}, in their order along the branch:")
     for line in _special_lines(branch, args.param):
         print(line)
     for what, switched_to in (("period doubling", doubled), ("branch point", branched)):

@@ -154,15 +154,20 @@ class Branch:
         """The special points of one kind."""
         return [p for p in self.special if p.kind == kind]
 
+    def special_counts(self) -> str:
+        """The special points counted by kind, in the order their kinds first occur along the branch, e.g.
+        ``"1 period-doubling, 58 grazing"`` (empty where there are none)."""
+        kinds = {}
+        for p in self.special:
+            kinds[p.kind] = kinds.get(p.kind, 0) + 1
+        return ", ".join(f"{k} {kind}" for kind, k in kinds.items())
+
     def __repr__(self) -> str:
         # a summary: the arrays (thousands of numbers on an FRF) are attributes to ask for
         n = len(self.params)
         if n == 0:
             return f"Branch({self.field}: no points; {self.message})"
-        kinds = {}
-        for p in self.special:
-            kinds[p.kind] = kinds.get(p.kind, 0) + 1
-        special = ", ".join(f"{k} {kind}" for kind, k in kinds.items()) or "none"
+        special = self.special_counts() or "none"
         ended = self.message if self.complete else f"unfinished: {self.message}"
         return (f"Branch({self.field} from {self.params[0]:.6g} to {self.params[-1]:.6g}: {n} period-{self.periods} "
                 f"orbits, {int(np.sum(~np.asarray(self.stable, dtype=bool)))} unstable; special points: {special}; "
