@@ -1069,7 +1069,9 @@ def test_the_branch_plot_gives_each_of_many_branches_its_own_colours():
 def test_a_dense_unstable_stretch_is_drawn_as_one_dashed_line():
     """Every segment is drawn once, solid where both its ends are stable and dashed otherwise, and each run of like
     segments as one line: drawn a segment at a time, each shorter than a dash, the dash pattern restarted at every
-    segment and a dense unstable arm (the Coulomb pair's at 420.5 rad/s, 900 points) looked solid."""
+    segment and a dense unstable arm (the Coulomb pair's at 420.5 rad/s, 900 points) looked solid. The special
+    points' markers lie under the lines (the Coulomb pair's two period doublings hid the unstable stretch between
+    them)."""
     from blademodel.orbits import Branch, SpecialPoint
     from blademodel.plots.branch import branch_figure
 
@@ -1093,6 +1095,10 @@ def test_a_dense_unstable_stretch_is_drawn_as_one_dashed_line():
     assert sorted(segments) == [k for k in range(n - 1) if k != 250]   # none from the gap's point
     assert all(ls == ("-" if stable[k] and stable[k + 1] else "--") for k, ls in segments.items())
     assert len(next(x for x, ls in drawn if ls == "--")) == 102   # the unstable arm and its two ends: one line
+    # the markers under the lines: two of them close together hid the stretch between them
+    marks = [line for line in ax.lines if line.get_label() == "gap (no orbit found)"]
+    assert marks and max(m.get_zorder() for m in marks) < min(line.get_zorder() for line in ax.lines
+                                                                if len(line.get_xdata()) > 1)
 
 
 def test_a_branch_and_an_orbit_print_as_summaries(pd_branch):

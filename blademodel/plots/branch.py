@@ -50,6 +50,10 @@ def stability_runs(stable, gaps=()):
     return runs
 
 
+#: The special points' markers' zorder: below the lines' (matplotlib's default 2), so that a stretch of the
+#: branch between two nearby markers still shows whether it is stable.
+MARKERS_UNDER_LINES = 1.9
+
 #: Beyond this many grazing points on a branch (a mistuned ring's contacts graze one by one) their markers are small.
 CROWDED = 40
 
@@ -136,9 +140,11 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
             if pts:
                 yy = [_between(p.param, x, y, p.index) for p in pts]
                 crowded = kind == "grazing" and len(pts) > CROWDED   # small, so that the curve stays visible
+                # under the branch's lines: two markers 5 rad/s apart (the Coulomb pair's period doublings)
+                # hid the unstable stretch between them
                 ax.plot([p.param for p in pts], yy, marker, color="k", ms=3 if crowded else 7,
                         mfc="none" if kind == "grazing" else "k", mew=0.6 if crowded else 1.0,
-                        label=None if kind in marked else label)
+                        label=None if kind in marked else label, zorder=MARKERS_UNDER_LINES)
                 marked.add(kind)
     if overlay is not None:
         ax.plot(overlay[0], overlay[1], ".", color="0.5", ms=3, label="integration")
