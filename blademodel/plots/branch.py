@@ -32,21 +32,15 @@ def stability_runs(stable, gaps=()):
     Each run is drawn as one line: a dash pattern restarts at every line, so segments drawn
     one by one, shorter than a dash (a dense branch), showed an unstable stretch solid.
     """
-    runs, start = [], None
+    runs = []
     for k in range(len(stable) - 1):
-        solid = bool(stable[k] and stable[k + 1])
         if k in gaps:
-            if start is not None:
-                runs.append((start, k, runs_solid))
-            start = None
             continue
-        if start is not None and solid != runs_solid:
-            runs.append((start, k, runs_solid))
-            start = None
-        if start is None:
-            start, runs_solid = k, solid
-    if start is not None:
-        runs.append((start, len(stable) - 1, runs_solid))
+        solid = bool(stable[k] and stable[k + 1])
+        if runs and runs[-1][1] == k and runs[-1][2] == solid:   # goes on from the last run, drawn alike
+            runs[-1] = (runs[-1][0], k + 1, solid)
+        else:
+            runs.append((k, k + 1, solid))
     return runs
 
 
@@ -140,8 +134,6 @@ def branch_figure(branch, state: str = "x1", *, quantity: str = "harmonic", over
             if pts:
                 yy = [_between(p.param, x, y, p.index) for p in pts]
                 crowded = kind == "grazing" and len(pts) > CROWDED   # small, so that the curve stays visible
-                # under the branch's lines: two markers 5 rad/s apart (the Coulomb pair's period doublings)
-                # hid the unstable stretch between them
                 ax.plot([p.param for p in pts], yy, marker, color="k", ms=3 if crowded else 7,
                         mfc="none" if kind == "grazing" else "k", mew=0.6 if crowded else 1.0,
                         label=None if kind in marked else label, zorder=MARKERS_UNDER_LINES)
