@@ -232,6 +232,9 @@ def _replotted_with_its_switched_branch(tmp_path, out, rep, monkeypatch):
     assert [b.periods for b in branches] == [1, 2] and kw["labels"] == ["period 1", "doubled at 1"]
     assert list(branches[1].params) == rep["doubled"][0]["values"]
     assert len(reduced) == 2 and kw_reduced["quantity"] == "reduction" and kw_reduced["labels"] == kw["labels"]
+    drawn.clear()   # a bifurcation diagram of the same, as 'continue --quantity section --plot' draws it
+    assert main(["plot", str(out), "--quantity", "section"]) == 0
+    assert drawn[0][1]["quantity"] == "section" and len(drawn[0][0]) == 2 and (tmp_path / "b_section.png").is_file()
 
 
 def _den_hartog(omega, m=0.085, k=1e5, F0=60.0, muN=10.0):

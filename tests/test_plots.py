@@ -293,6 +293,9 @@ def test_plot_cli_writes_pngs_next_to_result(tmp_path, capsys):
     assert code == 0, err
     assert out.splitlines() == [str(tmp_path / "m_map.png")]
     assert (tmp_path / "m_map.png").stat().st_size > 10_000
+    # a branch's options name themselves and their values on a sweep's result, which draws neither
+    assert cli.main(["plot", str(path), "--quantity", "section", "--state", "x*"]) == 2
+    assert "--state 'x*', --quantity 'section': only a branch file" in capsys.readouterr().err
 
 
 def test_plot_cli_cases_one_figure_per_law(tmp_path, capsys):

@@ -18,6 +18,11 @@ def register(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--state", default=None,
                    help="a branch's state drawn (default: its first coordinate), or a pattern such as 'x*' "
                         "(quoted): the largest and the smallest of the states it matches")
+    p.add_argument("--quantity", choices=("harmonic", "amplitude", "section"), default=None,
+                   help="what a branch's figure draws, as for 'continue --plot': first-harmonic amplitude (an FRF, "
+                        "default), half the peak-to-peak excursion, or the Poincare samples (a bifurcation diagram); "
+                        "written as <stem>_branch.png, <stem>_amplitude.png, <stem>_section.png. Its P_d is drawn "
+                        "too, where the file allows")
     p.set_defaults(run=run)
     return p
 
@@ -26,19 +31,22 @@ def run(args: argparse.Namespace) -> int:
     """Write the figures and print their paths; return the exit code."""
     from ..orbits.branch_file import is_branch_file
     from ..plots import plot_result
-    if args.state is not None and not is_branch_file(args.result):
-        raise ValueError(f"--state {args.state!r}: only a branch file (from 'blademodel continue --out') is drawn by "
-                         f"state; {args.result} is a sweep's result")
-    paths = plot_branch(Path(args.result), args.out, args.state) if is_branch_file(args.result) else \
-        plot_result(args.result, args.out)
+    branch_only = [f"{option} {value!r}" for option, value in (("--state", args.state), ("--quantity", args.quantity))
+                   if value is not None]
+    if branch_only and not is_branch_file(args.result):
+        raise ValueError(f"{', '.join(branch_only)}: only a branch file (from 'blademodel continue --out') is drawn "
+                         f"so; {args.result} is a sweep's result")
+    paths = plot_branch(Path(args.result), args.out, args.state, args.quantity or "harmonic") \
+        if is_branch_file(args.result) else plot_result(args.result, args.out)
     for path in paths:
         print(path)
     return 0
 
 
-def plot_branch(path: Path, out_dir=None, state: str | None = None) -> list[Path]:
+def plot_branch(path: Path, out_dir=None, state: str | None = None, quantity: str = "harmonic") -> list[Path]:
     """The forced response (first harmonic of ``state``, a name or a pattern; default the first coordinate) of a
-    branch file, ``<stem>_branch.png``, and its vibration reduction ``P_d``, ``<stem>_reduction.png`` (where the
+    branch file, ``<stem>_branch.png`` (or its ``quantity`` of :func:`~blademodel.plots.branch.branch_figure`,
+    ``<stem>_<quantity>.png``), and its vibration reduction ``P_d``, ``<stem>_reduction.png`` (where the
     file keeps its orbits' mean squares and its config, and the model without contacts has a closed-form steady
     state). The branches ``blademodel continue --switch`` saved beside it (``<stem>_pd1.nc``, ...,
     ``<stem>_bp1.nc``, ...: :func:`switched_files`) are drawn with it, as ``continue --plot`` drew them."""
@@ -56,8 +64,8 @@ def plot_branch(path: Path, out_dir=None, state: str | None = None) -> list[Path
     switched = switched_files(path)
     drawn = [(branch, path)] + [(load_branch(f), f) for f, _ in switched]
     labels = [f"period {branch.periods}"] + [label for _, label in switched] if switched else None
-    fig = branch_figure([b for b, _ in drawn], state, labels=labels)
-    out = folder / f"{path.stem}_branch.png"
+    fig = branch_figure([b for b, _ in drawn], state, quantity=quantity, labels=labels)
+    out = folder / f"{path.stem}_{'branch' if quantity == 'harmonic' else quantity}.png"
     fig.savefig(out, dpi=120)
     plt.close(fig)
     written = [out]
