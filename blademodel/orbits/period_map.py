@@ -214,6 +214,10 @@ class PeriodMap:
         #: the friction laws' discrete states (labels only resets set): held as part of the mode, their rows and
         #: columns of every Jacobian zero (:func:`hold_discrete`)
         self.discrete = integrator.discrete_states
+        #: the friction laws' other states: those a period leaves alone are held too (:func:`relaxed_law_states`)
+        model = getattr(integrator, "model", None)
+        first = 2 * len(model.coordinates) if model is not None else self.n
+        self.law_states = np.setdiff1d(np.arange(first, self.n), self.discrete)
         self.evaluations = 0   # integrations of the map (each over ``periods`` excitation periods)
         self.replays = 0       # tangent replays of a kept run (no integration)
         self.method = jacobian
@@ -329,7 +333,7 @@ class PeriodMap:
             if self.symmetry is not None:
                 M = self.symmetry.jacobian(M)
             return FlowSensitivity(state=r.end[:self.n].copy(), mode=_copy(r.mode_end),
-                                   monodromy=hold_discrete(M, self.discrete), parameter=None, events=r.n_log)
+                                   monodromy=self.hold(M), parameter=None, events=r.n_log)
         s = flow_sensitivity(ig, r.start[:self.n], r.mode, self.periods, dp=dp, dperiod=dperiod,
                              run=(r.end, r.mode_end, r.log, r.n_log), record=r.states)
         if r.fired:
@@ -337,10 +341,15 @@ class PeriodMap:
             if s.parameter is not None:
                 s.parameter = s.parameter + s.monodromy @ dl
             s.monodromy = s.monodromy @ D
-        s.monodromy = hold_discrete(s.monodromy, self.discrete)
+        s.monodromy = self.hold(s.monodromy)
         if s.parameter is not None:
             s.parameter[self.discrete] = 0.0
         return s
+
+    def hold(self, M: np.ndarray) -> np.ndarray:
+        """``M`` (a Jacobian of this map, in place) with the rows and columns of the discrete states and of the law
+        states the period left alone zero (:func:`hold_discrete`, :func:`relaxed_law_states`)."""
+        return hold_discrete(M, np.union1d(self.discrete, relaxed_law_states(M, self.law_states)).astype(np.int64))
 
     def __call__(self, y, mode):
         """The state and mode ``n T`` after ``(y, mode)``; ``last_events`` holds the events the run crossed."""
@@ -437,7 +446,36 @@ class PeriodMap:
                 finally:
                     stop.set()   # after an error or a Ctrl-C the other threads end at their next column
         self.evaluations += len(free) if base is not None else 2 * len(free)
-        return hold_discrete(J, self.discrete)
+        return self.hold(J)
+
+
+def relaxed_law_states(M: np.ndarray, law_states: np.ndarray) -> np.ndarray:
+    """The friction laws' states that the period map ``M`` leaves alone: each one's row and column of ``M`` is a
+    unit vector at a law state (the state itself, or on a ring's cyclic reduction the state it is turned into),
+    and so is every such state's.
+
+    A law whose contact stays open all period holds its states relaxed (a Jenkins element's stretch at 0,
+    ``docs/MODEL.md``): nothing moves them and they move nothing. Their unit rows would give the map a
+    multiplier 1 that no admissible perturbation has (a state open all period with a stretch is none the model
+    reaches), reporting a stable orbit as unstable, and make ``dP/dy - I`` singular, so that a branch
+    running into contact-free orbits stopped with "Singular matrix". Held as labels are
+    (:func:`hold_discrete`), Newton's step leaves them alone and each has a multiplier zero. A law stuck all
+    period is not among them: its stretch moves the blades (a family of orbits with residual stretch, whose
+    multiplier 1 is real).
+    """
+    law = set(int(i) for i in law_states)
+
+    def unit(v):
+        nz = np.flatnonzero(v)
+        return int(nz[0]) if nz.size == 1 and int(nz[0]) in law and v[nz[0]] == 1.0 else None
+
+    targets = {i: (unit(M[i, :]), unit(M[:, i])) for i in law}
+    held = {i for i, (r, c) in targets.items() if r is not None and c is not None}
+    while True:   # each kept state's row and column lead to kept states only
+        kept = {i for i in held if targets[i][0] in held and targets[i][1] in held}
+        if kept == held:
+            return np.array(sorted(held), dtype=np.int64)
+        held = kept
 
 
 def hold_discrete(M: np.ndarray, discrete: np.ndarray) -> np.ndarray:
