@@ -166,11 +166,11 @@ def _scale_of_excursions(amp: np.ndarray, n_q: int, discrete=()) -> np.ndarray:
     for sl in (slice(0, n_q), slice(n_q, 2 * n_q), slice(2 * n_q, n)):
         if sl.start < sl.stop:
             g = np.max(amp[sl])
-            if sl.start == 2 * n_q and n_q:
+            if sl.start == 2 * n_q and n_q and g == 0.0:
                 # the law states (a Jenkins element's stretch, a length like the coordinates) are all relaxed on an
                 # orbit whose contacts stay open: floored by the coordinates' scale, not 1e-300, which turned their
                 # next nonzero values into overflows
-                g = max(g, np.max(amp[:n_q]))
+                g = np.max(amp[:n_q])
             scale[sl] = np.maximum(scale[sl], 1e-3 * g)
     scale = np.maximum(scale, 1e-300) if np.any(scale > 0) else np.ones(n)
     scale[labels] = LABEL_SCALE
