@@ -479,7 +479,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     lo, hi = min(bounds), max(bounds)
     h = ds
     message = f"left [{lo:g}, {hi:g}] in {name}"
-    jumped = ahead = switched = gap_tried = False
+    jumped = ahead = switched = gap_tried = modes_tried = False
     shots = True        # fixed-value shots allowed (not on the retry of a step whose shot led onto a side arm)
     landing = None      # where the branch stood before its last fixed-value shot, while a reversal may undo it
     overlap = SelfOverlap(ctx.n)
@@ -528,6 +528,12 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             switched = True
             X_new, m_new, A_new = _other_arm(ctx, trail, X, m, ds_max)
             arm = X_new is not None
+        if X_new is None and h / 2 < ds_min and jumped and shots and not modes_tried and len(trail) > 1:
+            # a stick-slip switch of the orbit at the section, met from the side where Newton's method stalls
+            # in the last orbit's mode: shots just ahead from the kernel's other modes
+            modes_tried = True
+            X_new, m_new, A_new = _shoot_from_other_modes(ctx, trail, X, m, ds_max)
+            secant = X_new is not None
         gap = False
         if X_new is None and h / 2 < ds_min and jumped and shots and not gap_tried and len(trail) > 1:
             # everything else failed at the shortest step: the discrete flow may have no orbit over a
@@ -641,7 +647,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         jumped = False
         if new["regular"]:
             # a turn further on may be reached from its unstable side too, and another gap may follow
-            switched = gap_tried = False
+            switched = gap_tried = modes_tried = False
         for q in found:
             if isinstance(q, PendingPoint):
                 q.start()
@@ -681,6 +687,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             ds_max /= 2
             h = min(h, ds_max)
             landing, shots, jumped, ahead, switched, gap_tried = None, True, False, False, False, False
+            modes_tried = False
             continue
         why = stop(pts) if stop is not None and new["regular"] else None
         if why is not None:
@@ -793,6 +800,36 @@ def _shoot_along_secant(ctx, pts, X, mode, fractions=None):
     if fractions is None:
         return _shoot_ahead(ctx, X, way, mode)
     return _shoot_ahead(ctx, X, way, mode, fractions=fractions)
+
+
+def _shoot_from_other_modes(ctx, pts, X, mode, reach):
+    """:func:`_shoot_ahead` along the secant's way from the last orbit ``X`` started in each other mode of the
+    product-mode kernel (none on the per-contact kernel: a mode for each contact, too many to try), taking the first
+    orbit no farther from ``X`` than ``reach`` (the longest step): ``(X, mode, A)`` or ``(None, mode, None)``.
+
+    Where a stick-slip switch of the orbit passes the section, its state there lies on the switching boundary and
+    the map has a kink: from the mode of the side the branch came from, Newton's method stalls on the other side,
+    while a start in another mode, whose entry reset puts the state on that side, converges. Measured on the
+    bilinear pair in ``F0`` from 60 N down: at 4.50999 N the slip orbits' section state reaches the stick
+    boundary, shots from the slip mode stalled (residuals 3e-3 to 4e-2 from 4.5085 to 4.492 N) and the branch
+    jumped a gap to 2.74 N, over orbits that shooting from rest finds; from the open mode (its entry resets the
+    stretch), the shot at 4.5085 N converges on the stick orbit, 0.004 of the scale away. Tried only where
+    everything but the gap's long shots failed at the shortest step, so branches that got on before are
+    unchanged.
+    """
+    ig = ctx.fam.map_at(X[-1] * ctx.span).integrator
+    way = _field_way(ctx, pts, X)
+    if getattr(ig, "kernel", "") != "product" or way == 0.0:
+        return None, mode, None
+    now = int(np.asarray(mode).ravel()[0])
+    for other in range(len(ig.mode_names)):
+        if other == now:
+            continue
+        start = np.full(np.shape(mode), other, dtype=np.asarray(mode).dtype) if np.shape(mode) else other
+        found = _shoot_ahead(ctx, X, way, start, accept=lambda Xn: float(np.linalg.norm(Xn - X)) <= reach)
+        if found[0] is not None:
+            return found
+    return None, mode, None
 
 
 #: Points whose field values must all have gone one way for a secant that hardly moves the field to give its way
