@@ -111,7 +111,9 @@ def test_second_sweep_on_the_same_file_is_refused(tmp_path, reference):
 
 @linux_only
 def test_two_sweeps_started_together_do_not_mix(tmp_path):
-    # long enough points (~2 s each) that the first sweep still runs when the second has started
+    # long enough points (~2 s each) that the first sweep still runs when the second has started; held still (SIGSTOP)
+    # while the second one runs, so that on a loaded machine it cannot finish first (in CI beside other work the
+    # second sweep's start-up outlasted the first sweep, and it found a finished file of another study)
     longer = {**SLOW["run"], "transient": 8000}
     study = write_study(tmp_path, {**SLOW, "run": longer, "sweep": {"gamma": {"values": [3.0, 4.0]}}})
     out, tag = tmp_path / "slow.nc", "two-sweeps-" + str(os.getpid())
@@ -119,7 +121,11 @@ def test_two_sweeps_started_together_do_not_mix(tmp_path):
     try:
         assert wait_until(lambda: lock_path(out).exists() and lock_path(out).read_text(), 30)
         other = write_study(tmp_path, {**SLOW, "run": longer, "sweep": {"gamma": {"values": [5.0]}}}, "other.yaml")
-        r = cli("sweep", other, "--out", out, "--workers", "1", "--no-plot")
+        os.kill(first.pid, signal.SIGSTOP)
+        try:
+            r = cli("sweep", other, "--out", out, "--workers", "1", "--no-plot")
+        finally:
+            os.kill(first.pid, signal.SIGCONT)
         assert r.returncode == 1 and f"process {first.pid} on" in one_line(r.stderr)
         assert first.wait(60) == 0
     finally:
