@@ -92,12 +92,17 @@ class Model:
         return [(st if names.count(st) == 1 else f"{st}_{c.name}", c.name, st)
                 for c in self.contacts for st in c.friction.states]
 
-    def discrete_state_indices(self) -> list[int]:
-        """Positions in the physical state vector (coordinates, velocities, law states) of the laws'
-        ``discrete_states``: labels that only resets set, held as part of a periodic orbit's mode."""
+    def law_state_indices(self) -> list[int]:
+        """Positions in the physical state vector (coordinates, velocities, law states) of the friction laws'
+        states, in the order of :meth:`law_state_labels`."""
         first = 2 * len(self.coordinates)
+        return list(range(first, first + len(self.law_state_labels())))
+
+    def discrete_state_indices(self) -> list[int]:
+        """Positions in the physical state vector of the laws' ``discrete_states``: labels that only resets
+        set, held as part of a periodic orbit's mode."""
         by_contact = {c.name: set(c.friction.discrete_states) for c in self.contacts}
-        return [first + k for k, (_, c, st) in enumerate(self.law_state_labels()) if st in by_contact[c]]
+        return [i for i, (_, c, st) in zip(self.law_state_indices(), self.law_state_labels()) if st in by_contact[c]]
 
     @cached_property
     def parameters(self) -> dict[str, float]:

@@ -216,9 +216,11 @@ def run(args: argparse.Namespace) -> int:
         return 1
     doubled, branched, doubled_files = [], [], []
 
-    def switch_at(points, tag, key, label, what, follow) -> list:
+    def switch_at(points, tag, label, what, follow) -> list:
         """The branch ``follow(point, resume=..., ...)`` from each of ``points``, saved beside ``--out`` as
-        FILE_<tag>1.nc, ... (None where the switch failed, with a warning)."""
+        FILE_<tag>1.nc, ... (None where the switch failed, with a warning); its run settings name the point under
+        the tag's key (:data:`~.plot.SWITCHED`)."""
+        key = SWITCHED[tag][0]
         out = []
         for k, p in enumerate(points, 1):
             name = str(Path(args.out).with_name(f"{Path(args.out).stem}_{tag}{k}.nc")) if args.out else None
@@ -254,10 +256,9 @@ def run(args: argparse.Namespace) -> int:
                                    cyclic=args.cyclic, crossed=branch, **shared, **kw)
 
     if args.switch:
-        doubled = switch_at(branch.points("period-doubling"), "pd", SWITCHED["pd"][0], "period-doubled branch",
-                            "period doubling", switched)
-        branched = switch_at(branch.points("branch-point"), "bp", SWITCHED["bp"][0], "branch from branch point",
-                             "branch point", crossing)
+        doubled = switch_at(branch.points("period-doubling"), "pd", "period-doubled branch", "period doubling",
+                            switched)
+        branched = switch_at(branch.points("branch-point"), "bp", "branch from branch point", "branch point", crossing)
     state = args.state or branch.state_names[0]
     idx = state_indices(branch.state_names, state, "--state")
     reduction, unreduced = _reduction(branch, config)

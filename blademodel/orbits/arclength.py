@@ -821,12 +821,9 @@ def _shoot_from_other_modes(ctx, pts, X, mode, reach):
     way = _field_way(ctx, pts, X)
     if getattr(ig, "kernel", "") != "product" or way == 0.0:
         return None, mode, None
-    now = int(np.asarray(mode).ravel()[0])
-    for other in range(len(ig.mode_names)):
-        if other == now:
-            continue
-        start = np.full(np.shape(mode), other, dtype=np.asarray(mode).dtype) if np.shape(mode) else other
-        found = _shoot_ahead(ctx, X, way, start, accept=lambda Xn: float(np.linalg.norm(Xn - X)) <= reach)
+    now = kernel_mode(ig, mode)
+    for other in (m for m in range(len(ig.mode_names)) if m != now):
+        found = _shoot_ahead(ctx, X, way, other, accept=lambda Xn: float(np.linalg.norm(Xn - X)) <= reach)
         if found[0] is not None:
             return found
     return None, mode, None

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -157,10 +158,7 @@ class Branch:
     def special_counts(self) -> str:
         """The special points counted by kind, in the order their kinds first occur along the branch, e.g.
         ``"1 period-doubling, 58 grazing"`` (empty where there are none)."""
-        kinds = {}
-        for p in self.special:
-            kinds[p.kind] = kinds.get(p.kind, 0) + 1
-        return ", ".join(f"{k} {kind}" for kind, k in kinds.items())
+        return ", ".join(f"{k} {kind}" for kind, k in Counter(p.kind for p in self.special).items())
 
     def __repr__(self) -> str:
         # a summary: the arrays (thousands of numbers on an FRF) are attributes to ask for

@@ -216,8 +216,8 @@ class PeriodMap:
         self.discrete = integrator.discrete_states
         #: the friction laws' other states: those a period leaves alone are held too (:func:`relaxed_law_states`)
         model = getattr(integrator, "model", None)
-        first = 2 * len(model.coordinates) if model is not None else self.n
-        self.law_states = np.setdiff1d(np.arange(first, self.n), self.discrete)
+        law = model.law_state_indices() if model is not None else []
+        self.law_states = np.setdiff1d(np.asarray(law, dtype=np.int64), self.discrete)
         self.evaluations = 0   # integrations of the map (each over ``periods`` excitation periods)
         self.replays = 0       # tangent replays of a kept run (no integration)
         self.method = jacobian
@@ -349,7 +349,8 @@ class PeriodMap:
     def hold(self, M: np.ndarray) -> np.ndarray:
         """``M`` (a Jacobian of this map, in place) with the rows and columns of the discrete states and of the law
         states the period left alone zero (:func:`hold_discrete`, :func:`relaxed_law_states`)."""
-        return hold_discrete(M, np.union1d(self.discrete, relaxed_law_states(M, self.law_states)).astype(np.int64))
+        relaxed = relaxed_law_states(M, self.law_states) if self.law_states.size else self.law_states
+        return hold_discrete(M, np.union1d(self.discrete, relaxed) if relaxed.size else self.discrete)
 
     def __call__(self, y, mode):
         """The state and mode ``n T`` after ``(y, mode)``; ``last_events`` holds the events the run crossed."""

@@ -27,11 +27,8 @@ OUT = Path(__file__).resolve().parents[1] / "figures"
 
 
 def _report(label, b, t):
-    kinds = {}
-    for p in b.special:
-        kinds[p.kind] = kinds.get(p.kind, 0) + 1
-    print(f"{label}: {len(b.params)} points, {int(np.sum(~b.stable))} unstable, {kinds}, {b.message}; "
-          f"{time.process_time() - t:.0f} s CPU", flush=True)
+    print(f"{label}: {len(b.params)} points, {int(np.sum(~b.stable))} unstable, special points: "
+          f"{b.special_counts() or 'none'}; {b.message}; {time.process_time() - t:.0f} s CPU", flush=True)
 
 
 def frf_pair():
