@@ -19,6 +19,15 @@ def largest_lyapunov(integrator: HybridIntegrator, y, mode: int, *, start_period
     the Jenkins ``z = 0``). For a non-smooth system this finite-difference form is
     the usual practical estimate (no saltation matrices needed).
 
+    A friction law's state that a period leaves unchanged to the bit in both
+    trajectories (a Jenkins or Iwan stretch while its contact stays open: nothing
+    moves it and it moves nothing, and the next entry into contact resets it) is
+    **held**: its separation is left out of that period's distances and pulled back
+    to the reference's value. Counted, it is a neutral direction (multiplier 1) of
+    the extended state that no motion of the blades reaches, and the estimate of a
+    contact-free bilinear orbit tended to 0 instead of ``ln |mu_1|`` of its orbit.
+    A period in which no law state is held is measured as before, to the bit.
+
     Parameters
     ----------
     integrator : HybridIntegrator
@@ -47,19 +56,33 @@ def largest_lyapunov(integrator: HybridIntegrator, y, mode: int, *, start_period
     direction = np.ones(n) / np.sqrt(n)
     b = a.copy()
     b[:n] += d0 * scale * direction
+    law = _law_states(integrator)
     mode_a = mode_b = mode
     total = 0.0
     for k in range(start_period, start_period + periods):
+        start = (b[:n] - a[:n]) / scale
+        law_a, law_b = a[law], b[law]
         sa, mode_a, _ = integrator.advance(a, mode_a, k, k + 1)
         sb, mode_b, _ = integrator.advance(b, mode_b, k, k + 1)
         if sa or sb:
             raise RuntimeError(f"integration failed at period {k} while estimating the Lyapunov exponent")
         sep = (b[:n] - a[:n]) / scale
+        held = law[(a[law] == law_a) & (b[law] == law_b) & (start[law] != 0.0)]
+        d_start = d0
+        if held.size:
+            sep[held] = start[held] = 0.0
+            d_start = float(np.linalg.norm(start))
         d = float(np.linalg.norm(sep))
         if d == 0.0:
             return -np.inf  # both trajectories collapsed onto the same state
-        total += np.log(d / d0)
+        total += np.log(d / d_start)
         b[:n] = a[:n] + (sep * (d0 / d)) * scale
         b[n:] = a[n:]
         mode_b = mode_a
     return total / periods
+
+
+def _law_states(integrator) -> np.ndarray:
+    """Positions of the friction laws' states in the integrator's state (none where it has no model)."""
+    model = getattr(integrator, "model", None)
+    return np.asarray(model.law_state_indices() if model is not None else [], dtype=np.int64)
