@@ -258,6 +258,28 @@ def test_hybrid_integrator_advance_refuses_bad_arguments():
     assert status == 0 and t == pytest.approx(2 * integ.period)
 
 
+
+def test_a_run_recorded_from_period_0_that_starts_later_keeps_its_poincare_samples_in_bounds():
+    """``n_transient = 0`` with a later start: the Poincare array ``advance`` makes for itself has a row for every
+    period from 0 (the kernel writes period ``k``'s sample in row ``k - n_transient``). It was sized from the start
+    period, 0 being taken for 'not given', and the kernel wrote past its end: at a start of 2e7 the process
+    died (segmentation fault). Run in a child process, which such a write kills."""
+    import subprocess
+    import sys
+    code = ("import numpy as np\n"
+            "from blademodel.numeric import HybridIntegrator\n"
+            "from blademodel.zheng2022 import BladePair\n"
+            "integ = HybridIntegrator(BladePair(friction='bilinear').build(), steps_per_period=400)\n"
+            "a = integ.initial_state()\n"
+            "b = a.copy()\n"
+            "m = integ.mode_of(a)\n"
+            "ra = integ.advance(a, m, 2 * 10**7, 2 * 10**7 + 1, n_transient=0)\n"
+            "rb = integ.advance(b, m, 2 * 10**7, 2 * 10**7 + 1)\n"
+            "print(ra == rb and bool(np.array_equal(a, b)))\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.strip() == "True"
+
 @pytest.mark.slow   # a cold compile of a ring kernel (~50 s in CI); the product kernel's checks run by default
 def test_contact_integrator_advance_refuses_bad_arguments():
     import numpy as np

@@ -668,7 +668,9 @@ class ContactIntegrator(Integrator):
         if forces is not None and rec_N.shape[0] != nrec:
             raise ValueError("forces must have as many rows as the record")
         if poincare is None:
-            poincare = np.empty((max(end_period - (n_transient or start_period), 0), self.n_state))
+            # rows from the first recorded period on (n_transient = 0 is a period, not 'unset')
+            first = start_period if n_transient is None else n_transient
+            poincare = np.empty((max(end_period - first, 0), self.n_state))
         log_t, log_c, log_g, log_f, log_to = log if log is not None else self._empty_log
         # A contact fired before its own root reads its guards shifted until its next transition
         # (contact_guards.mark_near): hybrid state of the run, kept only where a call goes on from the

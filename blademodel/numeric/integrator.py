@@ -471,7 +471,9 @@ class HybridIntegrator(Integrator):
         rec_t, rec_y, rec_mode = record if record is not None else self._empty_rec
         log_t, log_g, log_f, log_to = log if log is not None else self._empty_log
         if poincare is None:
-            poincare = np.empty((max(end_period - (n_transient or start_period), 0), self.n_state))
+            # rows from the first recorded period on (n_transient = 0 is a period, not 'unset')
+            first = start_period if n_transient is None else n_transient
+            poincare = np.empty((max(end_period - first, 0), self.n_state))
         status, mode, t = self.module.integrate(
             y, int(mode), self.p, self.period, self.steps_per_period, int(start_period), int(end_period),
             int(start_period if n_transient is None else n_transient), int(record_every), self.event_tol,
