@@ -258,7 +258,6 @@ def test_hybrid_integrator_advance_refuses_bad_arguments():
     assert status == 0 and t == pytest.approx(2 * integ.period)
 
 
-
 def test_a_run_recorded_from_period_0_that_starts_later_keeps_its_poincare_samples_in_bounds():
     """``n_transient = 0`` with a later start: the Poincare array ``advance`` makes for itself has a row for every
     period from 0 (the kernel writes period ``k``'s sample in row ``k - n_transient``). It was sized from the start
