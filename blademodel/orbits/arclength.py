@@ -54,7 +54,7 @@ from .. import interrupts
 from ..numeric.blas_threads import blas_threads_for
 from .background import Locator, PendingPoint, resolve
 from .branch import Branch, ContinuationInterrupted, SpecialPoint  # noqa: F401  (SpecialPoint: the public name)
-from .corrector import _Context, _at_kink, _field_bracket, _off_circle, _special, _tangent
+from .corrector import _Context, _at_kink, _field_bracket, _off_circle, _special, _tangent, _unstable_count
 from .family import _Family
 from .period_map import FlowError, _copy, _key, kernel_mode
 from .self_overlap import NEAR, SelfOverlap, segment_ratios
@@ -594,7 +594,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             # a border collision is off the circle by nature: where the branch goes on through it (its new
             # tangent, oriented away from the kink, keeps the field's direction) it is kept; where it
             # turns back it is a nonsmooth fold, approached by shorter steps as before
-            T_away = _away_from_kink(ctx, X_new, m_new, A_new, new["events"], X_new - X)
+            T_away = _away_from_kink(ctx, X_new, m_new, A_new, new["events"], X_new - X, np.sign(T[-1]))
             retry = float(T_away[-1]) * float(T[-1]) < 0
         if not jumped and h / 2 >= ds_min and retry:
             # the stability changed, but no multiplier lies on the unit circle where the change is
@@ -610,7 +610,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             # point was shot at a value of the field) would lead back into the fold. Onward is
             # away from the kink (:func:`_away_from_kink`)
             T_new = T_away if T_away is not None else \
-                _away_from_kink(ctx, X_new, m_new, A_new, new["events"], X_new - X)
+                _away_from_kink(ctx, X_new, m_new, A_new, new["events"], X_new - X, np.sign(T[-1]))
         elif secant:   # the difference quotients there may straddle the kink: the secant is the tangent
             T_new = (X_new - X) / np.linalg.norm(X_new - X)
         elif jumped:   # across a kink: onward is away from the last point
@@ -895,36 +895,56 @@ def _stalled(ds_min, name, value, ctx, steps_per_period) -> str:
             f"through)")
 
 
-def _away_from_kink(ctx, X_new, mode, A_new, events, step, first=1e-3, growth=4.0):
+def _away_from_kink(ctx, X_new, mode, A_new, events, step, heading, first=1e-3, growth=4.0):
     """The tangent at ``X_new``, a point on an arm of the branch that starts at a kink of the map (the last
-    ``step`` crossed it), oriented away from the kink.
+    ``step`` crossed it, going the field's way ``heading``, +1 or -1), oriented away from the kink.
 
     Orienting it away from the last point instead misleads where the step landed on the new
     arm nearer the kink than the last point was from it: an arm that folds back is then
     walked into the kink, turned at it onto the arm the step came from, and the branch
     retraced (measured on the Coulomb pair at its nonsmooth fold at 420.684 rad/s, reached
-    by long steps: back down to where it started). The kink is where the orbit's events
-    change: orbits are corrected at ``X_new`` plus and minus ``delta`` along the tangent, on
-    the hyperplane normal to it, for ``delta`` from ``first`` of the step, growing by
-    ``growth`` up to the step, until on exactly one side the orbit's events or mode differ
-    from ``X_new``'s (or its correction fails): the kink is that way. Where both sides change
-    at once, or neither within the step, the tangent oriented away from the last point.
+    by long steps: back down to where it started). Which way the kink lies is decided by
+    the first of these that tells:
+
+    1. the side where the stability changed: orbits are corrected at ``X_new`` plus and
+       minus ``delta`` along the tangent, on the hyperplane normal to it, for ``delta``
+       from ``first`` of the step, growing by ``growth`` up to the step; the kink is on the
+       side where the orbit's count of unstable multipliers or its mode differs from
+       ``X_new``'s (or its correction fails), where exactly one side does;
+    2. the field: where ``X_new`` lies behind the last point (the step passed a turn and
+       the correction landed on the arm that comes back), onward is back in the field;
+    3. the side where the same probes' events first differ from ``X_new``'s, where exactly
+       one side's do.
+
+    Else the tangent oriented away from the last point. The events alone (the rule until
+    rule 1 and 2 came first) mislead where the new arm has grazings of its own nearer than
+    the kink: the Iwan pair at its nonsmooth fold at F0 = 3.712318 N going down, whose arms
+    lie 1e-5 of the state apart, their events changing every 1e-6 N; the branch was walked
+    back into the kink and turned onto itself.
     """
     reach = float(np.linalg.norm(step))
     t = _tangent(A_new, step)
+    unstable = _unstable_count(ctx.multipliers(A_new))
+    by_events = None
     delta = first * reach
     while delta <= reach * (1.0 + 1e-12):
-        changed = []
+        changed, differ = [], []
         for side in (1.0, -1.0):
-            Xc, mc, _ = ctx.correct(X_new + side * delta * t, t, _copy(mode), A_new, jacobian=False)
-            if Xc is None or ctx.events != events or _key(mc) != _key(mode):
+            Xc, mc, Ac = ctx.correct(X_new + side * delta * t, t, _copy(mode), A_new)
+            if Xc is None or _key(mc) != _key(mode) or _unstable_count(ctx.multipliers(Ac)) != unstable:
                 changed.append(side)
+            if Xc is None or ctx.events != events or _key(mc) != _key(mode):
+                differ.append(side)
         if len(changed) == 1:
             return -changed[0] * t
+        if by_events is None and differ:
+            by_events = -differ[0] * t if len(differ) == 1 else t
         if changed:
             break
         delta *= growth
-    return t
+    if float(step[-1]) * heading < 0:
+        return t if float(t[-1]) * heading < 0 else -t
+    return t if by_events is None else by_events
 
 
 def _shoot_ahead(ctx, X, direction, mode, fractions=(1e-6, 1e-5, 1e-4, 1e-3), accept=None):
