@@ -1020,7 +1020,8 @@ def test_a_mistuned_ring_turns_at_its_nonsmooth_fold_and_leaves_on_the_other_arm
                           {"blades": "8", "engine_order": "2", "mistuning_std": "0.02", "friction": "bilinear"})
     b = continuation(cfg, "omega", 250.0, 340.0, grazing_tol=float("inf"), max_points=1500, workers=1,
                      transient=100)
-    assert b.message == "left [250, 340] in omega"
+    assert b.message == ("left [250, 340] in omega at omega = 250, the end it started from, after it turned back "
+                         f"at the nonsmooth-fold at omega = {b.points('nonsmooth-fold')[0].param:.6g}")
     folds = [q.param for q in b.special if q.kind == "nonsmooth-fold"]
     assert len(folds) == 1 and abs(folds[0] - 252.8536) < 1e-3
     assert b.params.max() < 252.854 and b.params[-1] == 250.0 and np.all(b.params[1:-1] > 250.0)

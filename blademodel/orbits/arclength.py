@@ -478,7 +478,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     n_q = _n_coordinates(ig)
     lo, hi = min(bounds), max(bounds)
     h = ds
-    message = f"left [{lo:g}, {hi:g}] in {name}"
+    message = ""   # (every way out of the loop below says why)
     jumped = ahead = switched = gap_tried = modes_tried = False
     shots = True        # fixed-value shots allowed (not on the retry of a step whose shot led onto a side arm)
     landing = None      # where the branch stood before its last fixed-value shot, while a reversal may undo it
@@ -670,6 +670,8 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         if lam > hi + 1e-12 * span or lam < lo - 1e-12 * span or on_end:
             if bounds[1] in (lo, hi) and (lam > hi if bounds[1] == hi else lam < lo) or on_end and landed == bounds[1]:
                 message = f"reached {name} = {bounds[1]:g}"
+            else:
+                message = _left_at_start(lo, hi, name, bounds[0], special)
             break
         on_itself = overlap.verdict(pts, np.append(ctx.scale, span), taken) if new["regular"] else None
         if on_itself is not None:
@@ -698,6 +700,16 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
     for value, shorter in retaken:
         message += (f" (it turned back onto itself after a wrong turn near {name} = {value:.6g} and took the turn "
                     f"again from before it at ds_max = {shorter:g})")
+    return message
+
+
+def _left_at_start(lo: float, hi: float, name: str, start: float, special: list) -> str:
+    """Why a branch that left its range at the end it started from stopped: the range, that end, and the last
+    turn (a fold of either kind) that brought it back, if the branch has one."""
+    message = f"left [{lo:g}, {hi:g}] in {name} at {name} = {start:g}, the end it started from"
+    turns = [q for q in special if q.kind in ("fold", "nonsmooth-fold")]
+    if turns:
+        message += f", after it turned back at the {turns[-1].kind} at {name} = {turns[-1].param:.6g}"
     return message
 
 
