@@ -590,6 +590,32 @@ def test_the_iwan_pair_turns_at_a_nonsmooth_fold_whose_arms_graze_all_along():
             assert abs(arm(lower, value) - arm(upper, value)) > 1e-2 * abs(arm(lower, value))
         assert abs(y[0] - arm(on, value)) < 1e-4 * abs(y[0])
 
+def test_a_shot_at_a_fixed_value_returns_only_orbits_solved_to_tol(monkeypatch):
+    """Shooting at a fixed value of the field solves the state in physical units; the continuation goes on with it
+    scaled, and reads it back scaled. On the Iwan pair near 157.4329 rad/s (up from 150) a shot converged to 8e-12,
+    but its state, once rounded so, had a residual of 3.3e-4: the orbit lies on a switching boundary of the discrete
+    flow, where a change in the last bit changes its events. It was returned as the step's point (the branch only
+    noticed afterwards that the point's residual exceeded tol). Such a shot is now refused, saying why, and every
+    orbit a shot returns is solved to tol as the continuation reads it."""
+    from blademodel.orbits import corrector
+    shots, refused = [], []
+    original = corrector._Context.correct_at_value
+
+    def watched(ctx, X, mode, jacobian=True):
+        Xc, m, A = original(ctx, X, mode, jacobian)
+        if Xc is not None:
+            r, _ = ctx.residual(Xc, m)
+            shots.append(float(np.max(np.abs(r))) / ctx.tol)
+        elif "switching boundary" in ctx.why:
+            refused.append(ctx.why)
+        return Xc, m, A
+
+    monkeypatch.setattr(corrector._Context, "correct_at_value", watched)
+    b = continuation(BladePair(friction="iwan"), "omega", 150.0, 160.0, max_points=3000, workers=1)
+    assert b.message == "reached omega = 160"
+    assert shots and max(shots) <= 1.0
+    assert refused and "once its state is rounded to the continuation's scaled unknowns" in refused[0]
+
 @pytest.mark.parametrize("ds_max", [0.02, 0.05, 0.2])
 def test_the_coulomb_pair_passes_its_nonsmooth_fold_at_every_step_length(ds_max):
     """From 400 to 440 rad/s, whatever the longest step, the Coulomb pair's branch turns at its nonsmooth fold
