@@ -616,6 +616,39 @@ def test_a_shot_at_a_fixed_value_returns_only_orbits_solved_to_tol(monkeypatch):
     assert shots and max(shots) <= 1.0
     assert refused and "once its state is rounded to the continuation's scaled unknowns" in refused[0]
 
+def test_a_step_back_in_the_field_needs_a_turn_between_its_ends():
+    """Along a branch the field changes its way only at a turn. A fold, smooth or at a kink, changes the sign of
+    det(dP/dy - I), (-1) to the number of real multipliers above 1; the vertex of a symmetric branch (a pitchfork's)
+    does not, but a point past it is the image of one passed, off the polyline through the points passed. A
+    correction behind the last point, on that polyline, with that sign kept, is refused. Checked on constructed
+    points and Jacobians, and on the bilinear pair down from 600 rad/s at ds_max = 0.3, where such a correction (at
+    234.07 rad/s) was taken, the branch went over its points again and took the turn again at half the step;
+    refused, the branch reaches 150 rad/s with no wrong turn and the same folds and period doublings as the branch
+    at the default step."""
+    from types import SimpleNamespace
+
+    from blademodel.orbits.arclength import _ran_back_unturned
+    ctx = SimpleNamespace(unknowns=lambda q: q["X"])
+    pts = [{"X": np.array([0.1 * k, 0.0, 0.0, 0.01 * k])} for k in range(5)]   # (y, lambda) rising together
+    X, T = pts[-1]["X"], np.array([1.0, 0.0, 0.0, 0.1]) / np.hypot(1.0, 0.1)
+    A = np.hstack([np.diag([-0.5, -0.3, -0.2]), np.ones((3, 1))])      # every multiplier inside: det < 0
+    A_fold = A.copy()
+    A_fold[0, 0] = 0.4                                                 # one real multiplier above 1
+    on_passed, mirror = np.array([0.25, 0.0, 0.0, 0.025]), np.array([0.25, 0.3, 0.0, 0.025])
+    assert _ran_back_unturned(ctx, pts, X, on_passed, T, A, A, 0.05)
+    assert not _ran_back_unturned(ctx, pts, X, on_passed, T, A, A_fold, 0.05)   # across a fold
+    assert not _ran_back_unturned(ctx, pts, X, mirror, T, A, A, 0.05)           # past a symmetric vertex
+    assert not _ran_back_unturned(ctx, pts, X, np.array([0.5, 0.0, 0.0, 0.05]), T, A, A, 0.05)   # ahead
+    cfg = BladePair(friction="bilinear")
+    b = continuation(cfg, "omega", 600.0, 150.0, ds_max=0.3, max_points=3000, workers=1)
+    assert b.message == "reached omega = 150"
+    assert np.all(np.diff(b.params[:b.points("fold")[0].index + 1]) < 0)   # down to the first turn
+    ref = continuation(cfg, "omega", 600.0, 150.0, max_points=3000, workers=1)
+    for kind in ("fold", "period-doubling"):
+        mine, theirs = sorted(q.param for q in b.points(kind)), sorted(q.param for q in ref.points(kind))
+        assert len(mine) == len(theirs) and np.allclose(mine, theirs, rtol=0, atol=1e-3)
+
+
 @pytest.mark.parametrize("ds_max", [0.02, 0.05, 0.2])
 def test_the_coulomb_pair_passes_its_nonsmooth_fold_at_every_step_length(ds_max):
     """From 400 to 440 rad/s, whatever the longest step, the Coulomb pair's branch turns at its nonsmooth fold
@@ -908,7 +941,8 @@ def test_a_branch_goes_on_across_a_stretch_with_no_orbit_and_reports_the_gap(mon
 
 def _wrong_turn(monkeypatch, at=30):
     """Make the ``at``-th step's correction on the bilinear pair's branch down from 280 rad/s return the orbit of
-    four steps back (a wrong turn), with the refusal of corrections onto the part passed off."""
+    four steps back (a wrong turn), with the refusals of corrections onto the part passed and behind the last point
+    off."""
     from blademodel.orbits import arclength as al
     correct = al._Context.correct
     seen = []
@@ -925,6 +959,7 @@ def _wrong_turn(monkeypatch, at=30):
 
     monkeypatch.setattr(al._Context, "correct", backwards)
     monkeypatch.setattr(al, "_passed", lambda *args: False)
+    monkeypatch.setattr(al, "_ran_back_unturned", lambda *args: False)
 
 
 def test_a_branch_that_turned_back_onto_itself_takes_the_turn_again_at_shorter_steps(monkeypatch):
@@ -979,6 +1014,7 @@ def test_a_branch_that_comes_round_onto_itself_stops_and_says_so(monkeypatch):
     cfg = BladePair(friction="bilinear")
     plain = continuation(cfg, "omega", 280.0, 270.0, ds_max=0.02, max_points=200, workers=1)
     monkeypatch.setattr(al._Context, "predict", looping)
+    monkeypatch.setattr(al, "_ran_back_unturned", lambda *args: False)   # (it refuses such a landing)
     b = continuation(cfg, "omega", 280.0, 270.0, ds_max=0.02, max_points=200, workers=1)
     assert plain.message == "reached omega = 270"
     assert b.message.startswith("the branch came round onto itself") and "from its points 5 to 6" in b.message
