@@ -602,7 +602,8 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             # a border collision is off the circle by nature: where the branch goes on through it (its new
             # tangent, oriented away from the kink, keeps the field's direction) it is kept; where it
             # turns back it is a nonsmooth fold, approached by shorter steps as before
-            T_away = _away_from_kink(ctx, X_new, m_new, A_new, new["events"], X_new - X, np.sign(T[-1]))
+            T_away = _away_from_kink(ctx, X_new, m_new, A_new, new["events"], X_new - X, np.sign(T[-1]),
+                                     pts[-1]["unstable"])
             retry = float(T_away[-1]) * float(T[-1]) < 0
         if not jumped and h / 2 >= ds_min and retry:
             # the stability changed, but no multiplier lies on the unit circle where the change is
@@ -618,7 +619,8 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             # point was shot at a value of the field) would lead back into the fold. Onward is
             # away from the kink (:func:`_away_from_kink`)
             T_new = T_away if T_away is not None else \
-                _away_from_kink(ctx, X_new, m_new, A_new, new["events"], X_new - X, np.sign(T[-1]))
+                _away_from_kink(ctx, X_new, m_new, A_new, new["events"], X_new - X, np.sign(T[-1]),
+                                pts[-1]["unstable"])
         elif secant:   # the difference quotients there may straddle the kink: the secant is the tangent
             T_new = (X_new - X) / np.linalg.norm(X_new - X)
         elif jumped:   # across a kink: onward is away from the last point
@@ -922,7 +924,7 @@ def _stalled(ds_min, name, value, ctx, steps_per_period) -> str:
             f"through)")
 
 
-def _away_from_kink(ctx, X_new, mode, A_new, events, step, heading, first=1e-3, growth=4.0):
+def _away_from_kink(ctx, X_new, mode, A_new, events, step, heading, before=None, first=1e-3, growth=4.0):
     """The tangent at ``X_new``, a point on an arm of the branch that starts at a kink of the map (the last
     ``step`` crossed it, going the field's way ``heading``, +1 or -1), oriented away from the kink.
 
@@ -936,8 +938,11 @@ def _away_from_kink(ctx, X_new, mode, A_new, events, step, heading, first=1e-3, 
     1. the side where the stability changed: orbits are corrected at ``X_new`` plus and
        minus ``delta`` along the tangent, on the hyperplane normal to it, for ``delta``
        from ``first`` of the step, growing by ``growth`` up to the step; the kink is on the
-       side where the orbit's count of unstable multipliers or its mode differs from
-       ``X_new``'s (or its correction fails), where exactly one side does;
+       side where the orbit has the last point's count of unstable multipliers ``before``
+       (where that differs from ``X_new``'s; else any other count), or another mode, or
+       its correction fails, where exactly one side does: a change to a third count is
+       another kink (the 96-blade ring's period-doubled branch near 275.18 rad/s, whose
+       kinks lie close together, took a wrong turn where any change counted);
     2. the field: where ``X_new`` lies behind the last point (the step passed a turn and
        the correction landed on the arm that comes back), onward is back in the field;
     3. the side where the same probes' events first differ from ``X_new``'s, where exactly
@@ -952,13 +957,17 @@ def _away_from_kink(ctx, X_new, mode, A_new, events, step, heading, first=1e-3, 
     reach = float(np.linalg.norm(step))
     t = _tangent(A_new, step)
     unstable = _unstable_count(ctx.multipliers(A_new))
+
+    def came_from(count):   # the count of unstable multipliers on the arm the step came from
+        return count == before if before is not None and before != unstable else count != unstable
+
     by_events = None
     delta = first * reach
     while delta <= reach * (1.0 + 1e-12):
         changed, differ = [], []
         for side in (1.0, -1.0):
             Xc, mc, Ac = ctx.correct(X_new + side * delta * t, t, _copy(mode), A_new)
-            if Xc is None or _key(mc) != _key(mode) or _unstable_count(ctx.multipliers(Ac)) != unstable:
+            if Xc is None or _key(mc) != _key(mode) or came_from(_unstable_count(ctx.multipliers(Ac))):
                 changed.append(side)
             if Xc is None or ctx.events != events or _key(mc) != _key(mode):
                 differ.append(side)
