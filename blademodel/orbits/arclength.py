@@ -958,7 +958,7 @@ def _away_from_kink(ctx, X_new, mode, A_new, events, step, heading, before=None,
     t = _tangent(A_new, step)
     unstable = _unstable_count(ctx.multipliers(A_new))
 
-    def came_from(count):   # the count of unstable multipliers on the arm the step came from
+    def came_from(count):   # whether an orbit with this count of unstable multipliers is on the arm the step left
         return count == before if before is not None and before != unstable else count != unstable
 
     by_events = None
