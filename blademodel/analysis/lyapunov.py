@@ -56,7 +56,7 @@ def largest_lyapunov(integrator: HybridIntegrator, y, mode: int, *, start_period
     direction = np.ones(n) / np.sqrt(n)
     b = a.copy()
     b[:n] += d0 * scale * direction
-    law = _law_states(integrator)
+    law = integrator.law_states
     mode_a = mode_b = mode
     total = 0.0
     for k in range(start_period, start_period + periods):
@@ -81,8 +81,3 @@ def largest_lyapunov(integrator: HybridIntegrator, y, mode: int, *, start_period
         mode_b = mode_a
     return total / periods
 
-
-def _law_states(integrator) -> np.ndarray:
-    """Positions of the friction laws' states in the integrator's state (none where it has no model)."""
-    model = getattr(integrator, "model", None)
-    return np.asarray(model.law_state_indices() if model is not None else [], dtype=np.int64)

@@ -237,14 +237,32 @@ class Integrator:
     def state_names(self) -> list[str]:
         return list(self.meta["state"])
 
+    def _structural(self, key: str, make):
+        """``make()``, once: the model's structure fixes it, so it is kept, and shared by the copies made for other
+        values of the parameters."""
+        found = self.__dict__.get(key)
+        if found is None:
+            found = self.__dict__[key] = make()
+        return found
+
     @property
     def discrete_states(self) -> np.ndarray:
         """Positions of the friction laws' ``discrete_states`` in the state vector (whole-number labels that only
         resets set: a periodic orbit holds them as part of its mode, :mod:`blademodel.orbits`)."""
-        found = self.__dict__.get("_discrete_states")
-        if found is None:   # the structure fixes them: kept, and shared by the copies made for other values
-            found = self._discrete_states = np.array(self.model.discrete_state_indices(), dtype=np.int64)
-        return found
+        return self._structural("_discrete_states",
+                                lambda: np.array(self.model.discrete_state_indices(), dtype=np.int64))
+
+    @property
+    def law_states(self) -> np.ndarray:
+        """Positions of all the friction laws' states in the state vector (:meth:`~blademodel.model.Model.
+        law_state_indices`), the discrete ones among them."""
+        return self._structural("_law_states", lambda: np.array(self.model.law_state_indices(), dtype=np.int64))
+
+    @property
+    def continuous_law_states(self) -> np.ndarray:
+        """:attr:`law_states` but the :attr:`discrete_states`."""
+        return self._structural("_continuous_law_states",
+                                lambda: np.setdiff1d(self.law_states, self.discrete_states))
 
     def worker(self) -> "Integrator":
         """This integrator with work arrays of its own, to run in another thread.

@@ -896,8 +896,12 @@ def _passed(ctx, pts, X, step) -> bool:
     if not pts:
         return False
     P = np.array([ctx.unknowns(q) for q in pts])
-    if np.min(np.linalg.norm(P - X, axis=1)) <= step:
-        return True
+    return bool(np.min(np.linalg.norm(P - X, axis=1)) <= step) or _on_polyline(P, X, step)
+
+
+def _on_polyline(P, X, step) -> bool:
+    """Whether ``X`` lies on the polyline through the rows of ``P`` (scaled unknowns): within
+    :data:`~.self_overlap.NEAR` of the longer of a segment and ``step``."""
     return len(P) > 1 and bool(np.min(segment_ratios(P[:-1] - X, P[1:] - X, step)) <= NEAR)
 
 
@@ -1053,17 +1057,15 @@ def _ran_back_unturned(ctx, pts, X, X_new, T, A, A_new, step) -> bool:
     of multipliers passes ``+1``: a fold, smooth or at a kink. At the vertex of a symmetric
     branch (which meets another at a pitchfork, its halves images of each other under the
     symmetry) it does not, but a point past that vertex is the image of one passed, not a
-    point on the polyline through the points passed (``pts``, the last one ``X`` among them),
-    which this asks too (within :data:`~.self_overlap.NEAR` of the longer of a segment and
-    ``step``).
+    point on the polyline through the points passed (``pts``, the last one ``X`` among them,
+    :func:`_on_polyline`), which this asks too.
     """
     if float(X_new[-1] - X[-1]) * float(T[-1]) >= 0 or len(pts) < 2:
         return False
     n = A.shape[0]
     if np.linalg.slogdet(A[:, :n])[0] * np.linalg.slogdet(A_new[:, :n])[0] <= 0:
         return False
-    P = np.array([ctx.unknowns(q) for q in pts])
-    return bool(np.min(segment_ratios(P[:-1] - X_new, P[1:] - X_new, step)) <= NEAR)
+    return _on_polyline(np.array([ctx.unknowns(q) for q in pts]), X_new, step)
 
 
 def _oriented(T_new, A_new, A, T):

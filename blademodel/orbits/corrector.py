@@ -167,12 +167,13 @@ class _Context:
         Xc = np.append(y / self.scale, X[-1])
         self.iterations = self.max_corrections // 2
         r, _ = self.residual(Xc, mode)   # (and the orbit's events)
-        if residual_size(r, self.discrete) > self.tol:
+        res = residual_size(r, self.discrete)
+        if res > self.tol:
             # the state, scaled and back, moved by its rounding, and the map moved by much more: the orbit
             # lies on a switching boundary of the discrete flow (the Iwan pair at 157.4329 rad/s: 8e-12 shot,
             # 3.3e-4 rounded), where the continuation cannot stand
             self.why = (f"{self.why}; shooting at {self.fam.name} = {lam:.6g}: the orbit's residual "
-                        f"{residual_size(r, self.discrete):.3g} once its state is rounded to the continuation's "
+                        f"{res:.3g} once its state is rounded to the continuation's "
                         f"scaled unknowns (it lies on a switching boundary)")
             return None, mode, None
         if not jacobian:

@@ -215,9 +215,7 @@ class PeriodMap:
         #: columns of every Jacobian zero (:func:`hold_discrete`)
         self.discrete = integrator.discrete_states
         #: the friction laws' other states: those a period leaves alone are held too (:func:`relaxed_law_states`)
-        model = getattr(integrator, "model", None)
-        law = model.law_state_indices() if model is not None else []
-        self.law_states = np.setdiff1d(np.asarray(law, dtype=np.int64), self.discrete)
+        self.law_states = integrator.continuous_law_states
         self.evaluations = 0   # integrations of the map (each over ``periods`` excitation periods)
         self.replays = 0       # tangent replays of a kept run (no integration)
         self.method = jacobian
