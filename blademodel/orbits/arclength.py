@@ -660,8 +660,8 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             # from 290.8391745 rad/s, until max_points, where the discrete flow has no orbit a step further)
             ahead_reach = tuple(f for f in ahead_reach if f > 1.5 * abs(float(X_new[-1] - X[-1])))
         ahead = False
-        if off_circle and T_new[-1] * T[-1] < 0:
-            found = [replace(q, kind="nonsmooth-fold") if _at_kink(q) else q for q in found]
+        if off_circle:
+            found = _kinds_at_kink(found, bool(T_new[-1] * T[-1] < 0))
         jumped = False
         if new["regular"]:
             # a turn further on may be reached from its unstable side too, and another gap may follow
@@ -719,6 +719,17 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         message += (f" (it turned back onto itself after a wrong turn near {name} = {value:.6g} and took the turn "
                     f"again from before it at ds_max = {shorter:g})")
     return message
+
+
+def _kinds_at_kink(found: list, turned: bool) -> list:
+    """The special points ``found`` by a step whose stability changed at a kink of the map (one of them located where
+    no multiplier lies on the unit circle, :func:`.corrector._off_circle`): where the branch ``turned`` there, those
+    at the kink (border collisions too) are a nonsmooth fold; else those off the circle are border collisions,
+    whatever the multiplier nearest the circle. The Iwan pair down in omega at 2000 steps a period reported three
+    Neimark-Sacker bifurcations near 165.56 rad/s with a multiplier of modulus 0.458: the stability changes of an
+    unstable window at kinks, the multiplier nearest the circle a complex one inside it."""
+    return [replace(q, kind="nonsmooth-fold") if turned and _at_kink(q) else
+            replace(q, kind="border-collision") if _off_circle(q) else q for q in found]
 
 
 def _left_at_start(lo: float, hi: float, name: str, start: float, special: list) -> str:

@@ -1,0 +1,55 @@
+"""The labels of stability changes located at a kink of the period map, where no multiplier lies on the unit
+circle (:func:`blademodel.orbits.arclength._kinds_at_kink`)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from blademodel.orbits import continuation
+from blademodel.orbits.arclength import _kinds_at_kink
+from blademodel.orbits.branch import SpecialPoint
+from blademodel.zheng2022 import BladePair
+
+#: The kinds of the smooth bifurcations, whose critical multiplier lies on the unit circle.
+SMOOTH = ("fold", "branch-point", "period-doubling", "neimark-sacker")
+
+
+def _point(kind, multiplier):
+    return SpecialPoint(kind=kind, param=1.0, state=np.zeros(2), multiplier=complex(multiplier), index=0, mode=0)
+
+
+@pytest.mark.parametrize("turned", [False, True])
+def test_a_stability_change_off_the_circle_is_a_kink_s(turned):
+    """Off the circle (by more than 0.05) a Neimark-Sacker or period-doubling label is a border collision where the
+    branch goes on, and a nonsmooth fold where it turns (a border collision too); on the circle a label stays, and a
+    grazing point stays what it is."""
+    found = [_point("neimark-sacker", 0.458 * np.exp(2.8j)), _point("period-doubling", -0.9),
+             _point("neimark-sacker", np.exp(1j)), _point("grazing", 0.3), _point("border-collision", 4.97)]
+    kinds = [q.kind for q in _kinds_at_kink(found, turned)]
+    if turned:
+        assert kinds == ["nonsmooth-fold", "nonsmooth-fold", "neimark-sacker", "grazing", "nonsmooth-fold"]
+    else:
+        assert kinds == ["border-collision", "border-collision", "neimark-sacker", "grazing", "border-collision"]
+    assert [q.multiplier for q in _kinds_at_kink(found, turned)] == [q.multiplier for q in found]
+
+
+@pytest.mark.slow
+def test_the_iwan_branch_s_smooth_bifurcations_lie_on_the_circle():
+    """The Iwan pair down in omega from 600 to 150 rad/s at 2000 steps a period: every fold, period doubling and
+    Neimark-Sacker bifurcation it reports has its multiplier on the unit circle (to 1e-3), and it reports the same
+    eight folds and eight period doublings as the branch up (to 1e-5 rad/s). Near 165.56 rad/s it reported three
+    Neimark-Sacker bifurcations with a multiplier of modulus 0.458 (stability changes at kinks); they are border
+    collisions."""
+    down = continuation(BladePair(friction="iwan"), "omega", 600.0, 150.0, max_points=3000, workers=1,
+                        steps_per_period=2000)
+    up = continuation(BladePair(friction="iwan"), "omega", 150.0, 600.0, max_points=3000, workers=1,
+                      steps_per_period=2000)
+    assert down.message == "reached omega = 150" and up.message == "reached omega = 600"
+    smooth = [q for q in down.special if q.kind in SMOOTH]
+    assert smooth and all(abs(abs(q.multiplier) - 1) < 1e-3 for q in smooth)
+    for kind in ("fold", "period-doubling"):
+        a = np.sort([q.param for q in down.points(kind)])
+        b = np.sort([q.param for q in up.points(kind)])
+        assert a.size == b.size == 8
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-5)
