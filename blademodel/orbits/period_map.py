@@ -245,27 +245,9 @@ class PeriodMap:
         key = (y[:self.n].tobytes(), _key(mode))
         if self._last is not None and self._last[0] == key:
             return self._last[1]
-        full = np.zeros(ig.n_state)
         rec = ig.record_buffer(self.periods * ig.steps_per_period + 1)
-        while True:
-            # settled again for each attempt: the per-contact kernel's run goes on with the marks its settling
-            # left (ContactIntegrator.settle), which a run before it has cleared
-            full[:] = 0.0
-            full[:self.n] = y[:self.n]
-            full[self.discrete] = np.rint(full[self.discrete])   # labels: whole numbers, whatever Newton made
-            fired: list = []
-            m0 = settle(ig, full, _copy(mode), fired)
-            start = full.copy()
-            counters = np.zeros(N_COUNTERS, dtype=np.int64)
-            log = ig.log_buffer(self._log_size)
-            status, mode_end, t = ig.advance(full, _copy(m0), 0, self.periods, n_transient=0, record=rec, log=log,
-                                             counters=counters, check=False)
-            if status != 0:
-                raise FlowError(f"the integration stopped at t = {t:.6g} s with status {status}")
-            if counters[C_LOGGED] <= self._log_size:
-                break
-            self._log_size = int(counters[C_LOGGED]) + 16
-        self.evaluations += 1
+        fired: list = []
+        full, m0, start, mode_end, log, counters = self._logged(y, mode, rec, fired)
         if self.symmetry is not None:   # G(y) = S^s Phi(y)
             full[:self.n] = self.symmetry.turned(full)
             mode_end = self.symmetry.turned_modes(mode_end)
@@ -400,25 +382,39 @@ class PeriodMap:
         """``P(y)`` and its run's signature (:meth:`MapRun.signature`): nothing recorded but the event log, nothing
         kept. For a difference quotient that must tell whether it crossed a change of the events."""
         ig = self._ig
+        full, _, _, _, log, counters = self._logged(y, mode)
+        Py = full[:self.n].copy()
+        signature = log_signature(log, int(counters[C_LOGGED]), self.symmetry is not None,
+                                  CASCADE_BRACKETS * ig.event_tol * ig.period / ig.steps_per_period)
+        return (Py if self.symmetry is None else self.symmetry.turned(Py)), signature
+
+    def _logged(self, y, mode, record=None, fired: list | None = None) -> tuple:
+        """One integration of the map from ``(y, mode)`` with its event log (and ``record``, where given), the log
+        grown until it holds every event: ``(end, settled mode, start, end mode, log, counters)``, full states.
+        ``fired`` gets the transitions the settling fired (as :func:`settle` appends them)."""
+        ig = self._ig
         full = np.zeros(ig.n_state)
         while True:
+            # settled again for each attempt: the per-contact kernel's run goes on with the marks its settling
+            # left (ContactIntegrator.settle), which a run before it has cleared
             full[:] = 0.0
             full[:self.n] = y[:self.n]
-            full[self.discrete] = np.rint(full[self.discrete])   # labels, as in run
+            full[self.discrete] = np.rint(full[self.discrete])   # labels: whole numbers, whatever Newton made
+            if fired is not None:
+                fired.clear()
+            m0 = settle(ig, full, _copy(mode), fired)
+            start = full.copy()
             counters = np.zeros(N_COUNTERS, dtype=np.int64)
             log = ig.log_buffer(self._log_size)
-            status, _, t = ig.advance(full, settle(ig, full, _copy(mode)), 0, self.periods, log=log,
-                                      counters=counters, check=False)
+            status, mode_end, t = ig.advance(full, _copy(m0), 0, self.periods, n_transient=0, record=record, log=log,
+                                             counters=counters, check=False)
             if status != 0:
                 raise FlowError(f"the integration stopped at t = {t:.6g} s with status {status}")
             if counters[C_LOGGED] <= self._log_size:
                 break
             self._log_size = int(counters[C_LOGGED]) + 16
         self.evaluations += 1
-        Py = full[:self.n].copy()
-        signature = log_signature(log, int(counters[C_LOGGED]), self.symmetry is not None,
-                                  CASCADE_BRACKETS * ig.event_tol * ig.period / ig.steps_per_period)
-        return (Py if self.symmetry is None else self.symmetry.turned(Py)), signature
+        return full, m0, start, mode_end, log, counters
 
     def _plain(self, ig, y, mode) -> np.ndarray:
         """The map's value from ``(y, mode)`` by :func:`_plain_map` on ``ig`` (this map's integrator or a worker's
