@@ -269,6 +269,12 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
     L.append(f"CLOSE_GUARD = np.array({close}, dtype=np.int64).reshape({n_modes}, {max(n_contacts, 1)})")
     owner = [[g.contact for g in m.guards] + [-1] * (max_g - len(m.guards)) for m in system.modes]
     L.append(f"GUARD_CONTACT = np.array({owner}, dtype=np.int64).reshape({n_modes}, {max_g})")
+    # the friction guards of elastic laws (no rigid stick), which a transition may leave a rounding error on their
+    # wrong side and loop.drift_offsets reads from their boundary; a rigid stick's guards keep their values
+    rigid = {j for m in system.modes for j in m.constrained}
+    drift = [[int(g.kind == "law" and g.contact not in rigid) for g in m.guards] + [0] * (max_g - len(m.guards))
+             for m in system.modes]
+    L.append(f"DRIFT_GUARD = np.array({drift}, dtype=np.int64).reshape({n_modes}, {max_g})")
     L.append(f"OPEN_MODE = {system.open_mode}")
     L.append("")
 
@@ -283,7 +289,7 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
     L.append("")
     for fn in ("rhs", "guards", "guard_rates", "transition", "rk4_step", "stage_sum", "rk_step", "crossed",
                "first_crossing", "inverse_quadratic", "safeguarded_trial", "hermite", "hermite_root",
-               "predicted_root", "earliest_predicted", "copy_guards",
+               "predicted_root", "earliest_predicted", "copy_guards", "drift_offsets", "offset_guards",
                "locate_event", "simultaneous_crossing", "initial_mode",
                "integrate"):
         # integrate releases the GIL: difference quotients of a period map run in threads

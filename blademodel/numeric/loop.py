@@ -21,6 +21,9 @@ STATUS_EVENT_STORM = 2
 C_STEPS, C_EVENTS, C_LOCATION_SUBSTEPS, C_RHS, C_LOGGED, C_RECORDS = 0, 1, 2, 3, 4, 5
 #: Cap on the trial sub-steps of one event's location.
 MAX_LOCATE_TRIALS = 160
+#: How far (relative to the largest guard of its mode) a guard may lie on its wrong side just after a transition and
+#: still be taken for a rounding error of a state the reset put on its boundary (:func:`drift_offsets`).
+DRIFTED = 1e-10
 
 
 def rk4_step(mode, t, y, h, p, k1, k2, k3, k4, tmp, out):
@@ -119,8 +122,45 @@ def copy_guards(g, d, gm, dm):
         d[i] = dm[i]
 
 
+def drift_offsets(mode, t, y, p, g, goff):
+    """``goff``: the offsets of the friction guards of elastic laws (``DRIFT_GUARD``) of ``mode`` that a transition into
+    it at ``(t, y)`` left a rounding error on their wrong side (within :data:`DRIFTED` of the largest of them), zero
+    for the others; ``g`` is work.
+
+    A reset that puts a state on a guard's boundary puts it there to rounding: an Iwan element that sticks takes the
+    stretch of its slip force exactly, and its stick guard ``mu N phi - kd z`` (shared with the other sticking
+    elements, the least of theirs) reads an ulp either side of zero. A crossing is a change of sign, so from below
+    zero the guard never fired however far it fell: another element of the same contact reaching its slip force
+    later in the step was missed, and it stuck on past it (``-9e-3`` N, the Iwan pair at 166.48 rad/s) until another
+    event's reset let it slip, a step later. Where rounding put the guard above zero it fired in time: the period map
+    jumped between neighbouring values of a parameter. Read minus its offset until the next transition, such a guard
+    starts on the boundary, fires as soon as it falls further and stays quiet while it returns (as the per-contact
+    kernel's ``mark_drifted`` reads its friction guards). A rigid stick's guards and the normal guards keep their
+    values, as there: a rigid slip that ends at the friction limit while the contact unloads is settled by its
+    transition, and a damped contact opens with its penetration still positive and closes where it crosses zero.
+    """
+    guards(mode, t, y, p, g)  # noqa: F821
+    scale = 0.0
+    for i in range(N_GUARDS[mode]):  # noqa: F821
+        if DRIFT_GUARD[mode, i]:  # noqa: F821
+            scale = max(scale, abs(g[i]))
+    for i in range(goff.shape[0]):
+        goff[i] = 0.0
+    for i in range(N_GUARDS[mode]):  # noqa: F821
+        d = GUARD_DIR[mode, i]  # noqa: F821
+        wrong = (d < 0 and g[i] < 0.0) or (d > 0 and g[i] > 0.0)
+        if DRIFT_GUARD[mode, i] and wrong and abs(g[i]) <= DRIFTED * scale:  # noqa: F821
+            goff[i] = g[i]
+
+
+def offset_guards(g, goff):
+    """``g -= goff`` (guards read from their boundaries, :func:`drift_offsets`)."""
+    for i in range(goff.shape[0]):
+        g[i] -= goff[i]
+
+
 def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp, y1, ymid, g0, g1, gm, glo,
-                 d0, d1, dm, dlo, tab, K, counters):
+                 d0, d1, dm, dlo, tab, K, counters, goff):
     """Bracket the earliest crossing of the sub-step ``[t, t + dt]`` below ``event_tol * h``.
 
     ``y1`` and ``g1`` hold the state and guards at the sub-step's end on entry, and
@@ -136,7 +176,8 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
     halve it, and a trial predicted within half a tolerance of the start or three
     quarters of one of the end set three quarters of a tolerance inside, so the last
     trial closes the bracket. Either way the location ends when the bracket cannot be
-    split any further in floating point. ``d0, d1, dm, dlo`` are the rates' work arrays.
+    split any further in floating point. ``d0, d1, dm, dlo`` are the rates' work arrays; ``goff`` the guards'
+    offsets (:func:`drift_offsets`).
     """
     n = y.shape[0]
     ng = g0.shape[0]
@@ -187,6 +228,7 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
         else:
             counters[C_RHS] += rk_step(mode, t, y, x * dt, p, k1, k2, k3, k4, tmp, ymid, tab, K)
         guards(mode, t + x * dt, ymid, p, gm)  # noqa: F821
+        offset_guards(gm, goff)
         if predicted:
             guard_rates(mode, t + x * dt, ymid, p, dm)  # noqa: F821
         else:
@@ -290,6 +332,7 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
     d1 = np.empty(ng)
     dm = np.empty(ng)
     dlo = np.empty(ng)
+    goff = np.zeros(ng)   # guards read from their boundaries until the next transition (drift_offsets)
     # stages of a tableau method (``tab``: A, b, c; empty for the fused RK4): s^2 + 2 s entries
     s_tab = int(round(math.sqrt(tab.shape[0] + 1.0))) - 1 if tab.shape[0] > 0 else 0
     K = np.empty((s_tab, n))
@@ -317,7 +360,9 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
                     counters[C_RHS] += rk_step(mode, t, y, dt, p, k1, k2, k3, k4, tmp, y1, tab, K)
                 if not g0_valid:
                     guards(mode, t, y, p, g0)  # noqa: F821
+                    offset_guards(g0, goff)
                 guards(mode, t_end, y1, p, g1)  # noqa: F821
+                offset_guards(g1, goff)
                 gi = first_crossing(mode, g0, g1)
                 if gi < 0:
                     for i in range(n):
@@ -328,7 +373,7 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
                     t = t_end
                     break
                 hi = locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp, y1, ymid,
-                                  g0, g1, gm, glo, d0, d1, dm, dlo, tab, K, counters)
+                                  g0, g1, gm, glo, d0, d1, dm, dlo, tab, K, counters, goff)
                 gi = first_crossing(mode, g0, g1)
                 t_sub = t
                 for i in range(n):
@@ -356,6 +401,7 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
                     guards(mode, t_sub, ysub, p, gm)  # noqa: F821
                     guards(mode, t, y, p, g1)  # noqa: F821
                     gi = simultaneous_crossing(mode, owner, gm, g1)
+                drift_offsets(mode, t, y, p, gm, goff)
                 g0_valid = False
             counters[C_STEPS] += 1
             for i in range(n):

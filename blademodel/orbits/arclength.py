@@ -11,9 +11,8 @@ orbit, the field by the continuation range).
 * **Jacobian**: the monodromy matrix from the tangent of the period map
   (:class:`~blademodel.orbits.period_map.PeriodMap`: variational equations with
   saltation matrices, replaying the run the last residual made) where the kernel has
-  one, else central differences; the field's column is a forward difference of the map (another
-  where that one crosses a jump of the map, :meth:`.corrector._Context._field_column`), or, on a
-  smooth stretch, from the tangent of the last points (:meth:`.corrector._Context.column_rule`).
+  one, else central differences; the field's column is a forward difference of the map,
+  or, on a smooth stretch, from the tangent of the last points (:meth:`.corrector._Context.column_rule`).
 * **Prediction**: on a smooth stretch, the quadratic through the last three points, for
   the unknowns and the Jacobian alike; else the tangent step and the last Jacobian.
 * **Correction**: Broyden's method from that matrix (residuals only), steps halved where

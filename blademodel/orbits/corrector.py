@@ -80,12 +80,6 @@ def _tangent(A, previous):
 #: :meth:`_Context.column_rule` takes a Jacobian's field column from the tangent of the branch's last points where
 #: that tangent's estimated error, relative to its field component, is at most this (else a difference quotient).
 COLUMN_ACCURACY = 1e-2
-#: The shifts of the field, in ``rel_step``, that a Jacobian's field column tries in turn by differences until one's run
-#: keeps the orbit's event signature (:meth:`_Context._field_column`): forward first, then back, then closer.
-FIELD_SHIFTS = (1.0, -1.0, 0.1, -0.1, 0.01, -0.01)
-#: A forward difference of the field's column that crossed a change of the events and lies farther than this times the
-#: column's size from one that did not crossed a jump of the map, and is not kept (:meth:`_Context._field_column`).
-JUMP_RATIO = 1.0
 #: Halvings of a correction step whose residual did not fall, before the step is taken as it is.
 MAX_HALVINGS = 4
 #: Corrections in a row that do not halve the best residual, after which a correction gives up.
@@ -234,10 +228,9 @@ class _Context:
         which follows the parameters and the moving period step by step, costs about
         seven. Its error, about ``delta`` relative, only slows the corrections by as
         much; the orbits are solved to ``tol`` whatever the column, and the multipliers
-        come from the exact monodromy. Where that difference crosses a jump of the map (a
-        change of the events), another one is taken (:meth:`_field_column`). ``column``, where
-        given (:meth:`column_rule`), is asked first for the field's column from the state
-        columns and may spare that integration.
+        come from the exact monodromy. ``column``, where given (:meth:`column_rule`), is
+        asked first for the field's column from the state columns and may spare that
+        integration.
         """
         n, d = self.n, self.rel_step
         lam = X[-1] * self.span
@@ -253,48 +246,10 @@ class _Context:
             J = P.differences(y, mode, self.scale, d)
         A[:, :n] = (J - np.eye(n)) * self.scale[None, :] / self.scale[:, None]
         c = None if column is None else column(X, mode, A[:, :n])
-        A[:, n] = c if c is not None else self._field_column(P, lam, y, mode)
+        A[:, n] = c if c is not None else \
+            (self.fam.map_at(lam + d * self.span).plain(y, mode) - P(y, mode)[0]) / self.scale / d
         A[self.discrete, n] = 0.0   # labels do not move with the field (a difference would read a jump)
         return A
-
-    def _field_column(self, P, lam, y, mode) -> np.ndarray:
-        """The field's column of the Jacobian at the orbit ``(y, mode)`` of ``P``, the map at ``lam``: the forward
-        difference, unless its run crossed a change of the orbit's events (its signature differs) and it lies farther
-        than :data:`JUMP_RATIO` times its own size from the first difference at the shifts :data:`FIELD_SHIFTS` (of
-        ``rel_step``) whose run keeps the signature: then that one.
-
-        Across a kink of a map continuous in the field the difference lies between the derivatives of the pieces
-        either side; across a jump it is the jump over the shift, however large. The Iwan pair's map jumps where its
-        events change (a cascade of resets that rounding splits otherwise): at 166.4829 rad/s (2000 steps a period)
-        the forward difference over ``2e-5`` rad/s read 3.7 times the field's derivative off it (by the tangent, to
-        which the difference over ``2e-6``, keeping the events, agrees to ``1e-6``), with the state's way along the
-        branch reversed; the tangent pointed back along the part passed, and the branch turned back onto itself.
-        Across the pair's kinks the two differ by 7 % at most (the Coulomb branch up at ``ds_max = 0.15`` near
-        542.08 rad/s), and the forward difference stays: with the other, that branch took a wrong turn there.
-        """
-        base = P(y, mode)[0]
-        own = P.last_run.signature()
-        first = None
-        held = np.ones(self.n, dtype=bool)
-        held[self.discrete] = False   # labels: their rows are zero in the Jacobian whatever the difference reads
-        for f in FIELD_SHIFTS:
-            d = f * self.rel_step
-            if first is not None and not self.fam.admits(lam + d * self.span):
-                continue
-            try:
-                Py, signature = self.fam.map_at(lam + d * self.span).plain_signed(y, mode)
-            except FlowError:
-                if first is None:
-                    raise
-                continue
-            column = (Py - base) / self.scale / d
-            if signature == own:
-                if first is None or \
-                        np.linalg.norm((first - column)[held]) > JUMP_RATIO * np.linalg.norm(column[held]):
-                    return column
-                return first
-            first = column if first is None else first
-        return first
 
     def correct(self, X, T, mode, A=None, jacobian=True, tol=None, newton=True, column=None, quick=False):
         """Newton on the orbit and arclength conditions from the prediction ``X``; ``(None, ..)`` on failure.

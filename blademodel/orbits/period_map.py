@@ -106,29 +106,23 @@ class MapRun:
         rounding decides (the Iwan pair's branch reported 148 grazing points from 280 to 320
         rad/s, most of them such flips: 77, 76, 77 events a period at steps of `5e-5` rad/s).
         """
-        if self._signature is None:
-            self._signature = log_signature(self.log, self.n_log, self.anonymous, self.instant)
+        if self._signature is None:   # sorted tuples: a few microseconds for the pair's dozen events
+            columns = self.log[2:] if self.anonymous else self.log[1:]
+            rows = list(zip(*(c[:self.n_log].tolist() for c in columns)))
+            if not np.any(columns[-2][:self.n_log] == columns[-1][:self.n_log]):
+                self._signature = tuple(sorted(rows))   # every transition changes its mode: nothing repeats
+                return self._signature
+            t = self.log[0][:self.n_log]
+            last: dict = {}
+            kept = []
+            for k, row in enumerate(rows):
+                if row[-2] == row[-1] and row in last and abs(t[k] - last[row]) <= self.instant:
+                    last[row] = t[k]
+                    continue
+                last[row] = t[k]
+                kept.append(row)
+            self._signature = tuple(sorted(kept))
         return self._signature
-
-
-def log_signature(log: tuple, n_log: int, anonymous: bool = False, instant: float = 0.0) -> tuple:
-    """The signature (:meth:`MapRun.signature`) of a run's event log ``log``, its first ``n_log`` entries: the contacts
-    left out where ``anonymous``, a law's reset that keeps its mode counted once where it repeats within ``instant``
-    (s) of itself."""
-    columns = log[2:] if anonymous else log[1:]
-    rows = list(zip(*(c[:n_log].tolist() for c in columns)))
-    if not np.any(columns[-2][:n_log] == columns[-1][:n_log]):
-        return tuple(sorted(rows))   # every transition changes its mode: nothing repeats (sorted tuples: a few us)
-    t = log[0][:n_log]
-    last: dict = {}
-    kept = []
-    for k, row in enumerate(rows):
-        if row[-2] == row[-1] and row in last and abs(t[k] - last[row]) <= instant:
-            last[row] = t[k]
-            continue
-        last[row] = t[k]
-        kept.append(row)
-    return tuple(sorted(kept))
 
 
 #: The window, in the kernel's event brackets (``event_tol h``), within which a law's reset that keeps its mode and
@@ -245,9 +239,27 @@ class PeriodMap:
         key = (y[:self.n].tobytes(), _key(mode))
         if self._last is not None and self._last[0] == key:
             return self._last[1]
+        full = np.zeros(ig.n_state)
         rec = ig.record_buffer(self.periods * ig.steps_per_period + 1)
-        fired: list = []
-        full, m0, start, mode_end, log, counters = self._logged(y, mode, rec, fired)
+        while True:
+            # settled again for each attempt: the per-contact kernel's run goes on with the marks its settling
+            # left (ContactIntegrator.settle), which a run before it has cleared
+            full[:] = 0.0
+            full[:self.n] = y[:self.n]
+            full[self.discrete] = np.rint(full[self.discrete])   # labels: whole numbers, whatever Newton made
+            fired: list = []
+            m0 = settle(ig, full, _copy(mode), fired)
+            start = full.copy()
+            counters = np.zeros(N_COUNTERS, dtype=np.int64)
+            log = ig.log_buffer(self._log_size)
+            status, mode_end, t = ig.advance(full, _copy(m0), 0, self.periods, n_transient=0, record=rec, log=log,
+                                             counters=counters, check=False)
+            if status != 0:
+                raise FlowError(f"the integration stopped at t = {t:.6g} s with status {status}")
+            if counters[C_LOGGED] <= self._log_size:
+                break
+            self._log_size = int(counters[C_LOGGED]) + 16
+        self.evaluations += 1
         if self.symmetry is not None:   # G(y) = S^s Phi(y)
             full[:self.n] = self.symmetry.turned(full)
             mode_end = self.symmetry.turned_modes(mode_end)
@@ -377,44 +389,6 @@ class PeriodMap:
         Py = self._plain(self._ig, y, mode)
         self.evaluations += 1
         return Py
-
-    def plain_signed(self, y, mode) -> tuple[np.ndarray, tuple]:
-        """``P(y)`` and its run's signature (:meth:`MapRun.signature`): nothing recorded but the event log, nothing
-        kept. For a difference quotient that must tell whether it crossed a change of the events."""
-        ig = self._ig
-        full, _, _, _, log, counters = self._logged(y, mode)
-        Py = full[:self.n].copy()
-        signature = log_signature(log, int(counters[C_LOGGED]), self.symmetry is not None,
-                                  CASCADE_BRACKETS * ig.event_tol * ig.period / ig.steps_per_period)
-        return (Py if self.symmetry is None else self.symmetry.turned(Py)), signature
-
-    def _logged(self, y, mode, record=None, fired: list | None = None) -> tuple:
-        """One integration of the map from ``(y, mode)`` with its event log (and ``record``, where given), the log
-        grown until it holds every event: ``(end, settled mode, start, end mode, log, counters)``, full states.
-        ``fired`` gets the transitions the settling fired (as :func:`settle` appends them)."""
-        ig = self._ig
-        full = np.zeros(ig.n_state)
-        while True:
-            # settled again for each attempt: the per-contact kernel's run goes on with the marks its settling
-            # left (ContactIntegrator.settle), which a run before it has cleared
-            full[:] = 0.0
-            full[:self.n] = y[:self.n]
-            full[self.discrete] = np.rint(full[self.discrete])   # labels: whole numbers, whatever Newton made
-            if fired is not None:
-                fired.clear()
-            m0 = settle(ig, full, _copy(mode), fired)
-            start = full.copy()
-            counters = np.zeros(N_COUNTERS, dtype=np.int64)
-            log = ig.log_buffer(self._log_size)
-            status, mode_end, t = ig.advance(full, _copy(m0), 0, self.periods, n_transient=0, record=record, log=log,
-                                             counters=counters, check=False)
-            if status != 0:
-                raise FlowError(f"the integration stopped at t = {t:.6g} s with status {status}")
-            if counters[C_LOGGED] <= self._log_size:
-                break
-            self._log_size = int(counters[C_LOGGED]) + 16
-        self.evaluations += 1
-        return full, m0, start, mode_end, log, counters
 
     def _plain(self, ig, y, mode) -> np.ndarray:
         """The map's value from ``(y, mode)`` by :func:`_plain_map` on ``ig`` (this map's integrator or a worker's
