@@ -21,8 +21,8 @@ STATUS_EVENT_STORM = 2
 C_STEPS, C_EVENTS, C_LOCATION_SUBSTEPS, C_RHS, C_LOGGED, C_RECORDS = 0, 1, 2, 3, 4, 5
 #: Cap on the trial sub-steps of one event's location.
 MAX_LOCATE_TRIALS = 160
-#: How far (relative to the largest guard of its mode) a guard may lie on its wrong side just after a transition and
-#: still be taken for a rounding error of a state the reset put on its boundary (:func:`drift_offsets`).
+#: How far (relative to the largest of its mode's guards that may drift) a guard may lie on its wrong side just after a
+#: transition and still be taken for a rounding error of a state the reset put on its boundary (:func:`drift_offsets`).
 DRIFTED = 1e-10
 
 
@@ -131,9 +131,9 @@ def drift_offsets(mode, t, y, p, g, goff):
     stretch of its slip force exactly, and its stick guard ``mu N phi - kd z`` (shared with the other sticking
     elements, the least of theirs) reads an ulp either side of zero. A crossing is a change of sign, so from below
     zero the guard never fired however far it fell: another element of the same contact reaching its slip force
-    later in the step was missed, and it stuck on past it (``-9e-3`` N, the Iwan pair at 166.48 rad/s) until another
-    event's reset let it slip, a step later. Where rounding put the guard above zero it fired in time: the period map
-    jumped between neighbouring values of a parameter. Read minus its offset until the next transition, such a guard
+    later in the step was missed, and it stuck on past it (the guard at ``-9e-3`` of the largest, the Iwan pair at
+    166.48 rad/s) until another event's reset let it slip, a step later. Where rounding put the guard above zero it
+    fired in time: the period map jumped between neighbouring values of a parameter. Read minus its offset until the next transition, such a guard
     starts on the boundary, fires as soon as it falls further and stays quiet while it returns (as the per-contact
     kernel's ``mark_drifted`` reads its friction guards). A rigid stick's guards and the normal guards keep their
     values, as there: a rigid slip that ends at the friction limit while the contact unloads is settled by its
