@@ -125,7 +125,7 @@ def copy_guards(g, d, gm, dm):
 def drift_offsets(mode, t, y, p, g, goff):
     """``goff``: the offsets of the friction guards of elastic laws (``DRIFT_GUARD``) of ``mode`` that a transition into
     it at ``(t, y)`` left a rounding error on their wrong side (within :data:`DRIFTED` of the largest of them), zero
-    for the others; ``g`` is work.
+    for the others; ``g`` is work. Returns whether any offset is not zero (else the guards need none subtracted).
 
     A reset that puts a state on a guard's boundary puts it there to rounding: an Iwan element that sticks takes the
     stretch of its slip force exactly, and its stick guard ``mu N phi - kd z`` (shared with the other sticking
@@ -146,11 +146,14 @@ def drift_offsets(mode, t, y, p, g, goff):
             scale = max(scale, abs(g[i]))
     for i in range(goff.shape[0]):
         goff[i] = 0.0
+    drifting = False
     for i in range(N_GUARDS[mode]):  # noqa: F821
         d = GUARD_DIR[mode, i]  # noqa: F821
         wrong = (d < 0 and g[i] < 0.0) or (d > 0 and g[i] > 0.0)
         if DRIFT_GUARD[mode, i] and wrong and abs(g[i]) <= DRIFTED * scale:  # noqa: F821
             goff[i] = g[i]
+            drifting = True
+    return drifting
 
 
 def offset_guards(g, goff):
@@ -160,7 +163,7 @@ def offset_guards(g, goff):
 
 
 def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp, y1, ymid, g0, g1, gm, glo,
-                 d0, d1, dm, dlo, tab, K, counters, goff):
+                 d0, d1, dm, dlo, tab, K, counters, goff, drifting):
     """Bracket the earliest crossing of the sub-step ``[t, t + dt]`` below ``event_tol * h``.
 
     ``y1`` and ``g1`` hold the state and guards at the sub-step's end on entry, and
@@ -177,7 +180,7 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
     quarters of one of the end set three quarters of a tolerance inside, so the last
     trial closes the bracket. Either way the location ends when the bracket cannot be
     split any further in floating point. ``d0, d1, dm, dlo`` are the rates' work arrays; ``goff`` the guards'
-    offsets (:func:`drift_offsets`).
+    offsets (:func:`drift_offsets`), subtracted where ``drifting``.
     """
     n = y.shape[0]
     ng = g0.shape[0]
@@ -228,7 +231,8 @@ def locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp
         else:
             counters[C_RHS] += rk_step(mode, t, y, x * dt, p, k1, k2, k3, k4, tmp, ymid, tab, K)
         guards(mode, t + x * dt, ymid, p, gm)  # noqa: F821
-        offset_guards(gm, goff)
+        if drifting:
+            offset_guards(gm, goff)
         if predicted:
             guard_rates(mode, t + x * dt, ymid, p, dm)  # noqa: F821
         else:
@@ -333,6 +337,7 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
     dm = np.empty(ng)
     dlo = np.empty(ng)
     goff = np.zeros(ng)   # guards read from their boundaries until the next transition (drift_offsets)
+    drifting = False
     # stages of a tableau method (``tab``: A, b, c; empty for the fused RK4): s^2 + 2 s entries
     s_tab = int(round(math.sqrt(tab.shape[0] + 1.0))) - 1 if tab.shape[0] > 0 else 0
     K = np.empty((s_tab, n))
@@ -360,9 +365,11 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
                     counters[C_RHS] += rk_step(mode, t, y, dt, p, k1, k2, k3, k4, tmp, y1, tab, K)
                 if not g0_valid:
                     guards(mode, t, y, p, g0)  # noqa: F821
-                    offset_guards(g0, goff)
+                    if drifting:
+                        offset_guards(g0, goff)
                 guards(mode, t_end, y1, p, g1)  # noqa: F821
-                offset_guards(g1, goff)
+                if drifting:
+                    offset_guards(g1, goff)
                 gi = first_crossing(mode, g0, g1)
                 if gi < 0:
                     for i in range(n):
@@ -373,7 +380,7 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
                     t = t_end
                     break
                 hi = locate_event(mode, t, y, dt, h, p, event_tol, predicted, k1, k2, k3, k4, tmp, y1, ymid,
-                                  g0, g1, gm, glo, d0, d1, dm, dlo, tab, K, counters, goff)
+                                  g0, g1, gm, glo, d0, d1, dm, dlo, tab, K, counters, goff, drifting)
                 gi = first_crossing(mode, g0, g1)
                 t_sub = t
                 for i in range(n):
@@ -401,7 +408,7 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
                     guards(mode, t_sub, ysub, p, gm)  # noqa: F821
                     guards(mode, t, y, p, g1)  # noqa: F821
                     gi = simultaneous_crossing(mode, owner, gm, g1)
-                drift_offsets(mode, t, y, p, gm, goff)
+                drifting = drift_offsets(mode, t, y, p, gm, goff)
                 g0_valid = False
             counters[C_STEPS] += 1
             for i in range(n):
