@@ -617,7 +617,8 @@ def test_a_shot_at_a_fixed_value_returns_only_orbits_solved_to_tol(monkeypatch):
     monkeypatch.undo()
     from blademodel.orbits.family import _Family
     fam = _Family(BladePair(friction="iwan"), "omega", 1,
-                  dict(steps_per_period=1000, event_tol=1e-10, method="rk4", kernel="auto"), 160.0, bounds=(150.0, 160.0))
+                  dict(steps_per_period=1000, event_tol=1e-10, method="rk4", kernel="auto"), 160.0,
+                  bounds=(150.0, 160.0))
     orbit = find_periodic_orbit(None, integrator=fam.map_at(160.0).integrator, transient=30)
     ctx = corrector._Context(fam, orbit.scale, 10.0, 1e-10, 1e-6, 8)
     X = np.append(orbit.state / orbit.scale, 160.0 / ctx.span)

@@ -40,9 +40,10 @@ def test_the_iwan_branch_s_smooth_bifurcations_lie_on_the_circle():
     Neimark-Sacker bifurcation it reports has its multiplier on the unit circle (to 1e-3), and it reports the same
     eight folds and eight period doublings as the branch up (to 1e-3 rad/s: going up, the fold at 450.41 rad/s, where
     the orbits' events change at every point, is located 3e-4 rad/s off, with a multiplier of modulus 1.026; the
-    other fifteen agree to 2e-6). With the Iwan elements' missed slips (tests/test_drifted_guards.py) the branch down
-    reported windows of instability at kinks near 165.56 rad/s, three of their stability changes as Neimark-Sacker
-    bifurcations with a multiplier of modulus 0.458: border collisions."""
+    other fifteen agree to 2e-6). With the Iwan elements' missed slips (tests/test_drifted_guards.py) and a rule for
+    the field's column since taken out, the branch down reported windows of instability at kinks near 165.56 rad/s,
+    three of their stability changes as Neimark-Sacker bifurcations with a multiplier of modulus 0.458: border
+    collisions."""
     down = continuation(BladePair(friction="iwan"), "omega", 600.0, 150.0, max_points=3000, workers=1,
                         steps_per_period=2000)
     up = continuation(BladePair(friction="iwan"), "omega", 150.0, 600.0, max_points=3000, workers=1,

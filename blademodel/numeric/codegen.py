@@ -289,7 +289,8 @@ def generate(system: HybridSystem, *, energy: bool = False) -> tuple[str, dict]:
     L.append("")
     for fn in ("rhs", "guards", "guard_rates", "transition", "rk4_step", "stage_sum", "rk_step", "crossed",
                "first_crossing", "inverse_quadratic", "safeguarded_trial", "hermite", "hermite_root",
-               "predicted_root", "earliest_predicted", "copy_guards", "drift_offsets", "offset_guards",
+               "predicted_root", "earliest_predicted", "copy_guards", "wrong_side", "drift_offsets",
+               "offset_guards",
                "locate_event", "simultaneous_crossing", "initial_mode",
                "integrate"):
         # integrate releases the GIL: difference quotients of a period map run in threads

@@ -140,11 +140,6 @@ def guard_offsets(cm, I, WI, WF, G):
             G[j, gi] -= goff[j * GMAX + gi]  # noqa: F821
 
 
-def wrong_side(g, d):
-    """Whether a guard of value ``g`` and crossing direction ``d`` lies on the side its mode forbids."""
-    return (d < 0 and g < 0.0) or (d > 0 and g > 0.0)
-
-
 def mark_near(j, cm, I, WI, WF, G):
     """Mark contact ``j``, just fired before its own root (``first_near_crossing``), with the offsets of its
     new mode's guards ``G[j]`` at the event; ``G[j]`` is shifted by them.
@@ -217,11 +212,6 @@ def mark_drifted(j, old, cm, I, WI, WF, G):
             mark_near(j, cm, I, WI, WF, G)
             return
 
-
-#: How far (relative to the largest friction guard of its mode) an elastic law's friction guard may lie on its
-#: wrong side after a regular transition and still be taken for the drift of its integrated state
-#: (``mark_drifted``): ``8e-13`` measured (``-9.7e-11`` N against ``2 mu N = 117`` N).
-DRIFTED = 1e-10
 
 
 def mark_suspects(t, cm, I, WI, WF, G0, G1, window):

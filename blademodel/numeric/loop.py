@@ -21,9 +21,6 @@ STATUS_EVENT_STORM = 2
 C_STEPS, C_EVENTS, C_LOCATION_SUBSTEPS, C_RHS, C_LOGGED, C_RECORDS = 0, 1, 2, 3, 4, 5
 #: Cap on the trial sub-steps of one event's location.
 MAX_LOCATE_TRIALS = 160
-#: How far (relative to the largest of its mode's guards that may drift) a guard may lie on its wrong side just after a
-#: transition and still be taken for a rounding error of a state the reset put on its boundary (:func:`drift_offsets`).
-DRIFTED = 1e-10
 
 
 def rk4_step(mode, t, y, h, p, k1, k2, k3, k4, tmp, out):
@@ -122,10 +119,11 @@ def copy_guards(g, d, gm, dm):
         d[i] = dm[i]
 
 
-def drift_offsets(mode, t, y, p, g, goff):
-    """``goff``: the offsets of the friction guards of elastic laws (``DRIFT_GUARD``) of ``mode`` that a transition into
-    it at ``(t, y)`` left a rounding error on their wrong side (within :data:`DRIFTED` of the largest of them), zero
-    for the others; ``g`` is work. Returns whether any offset is not zero (else the guards need none subtracted).
+def drift_offsets(mode, g, goff):
+    """``goff``: the offsets of the friction guards of elastic laws (``DRIFT_GUARD``) of ``mode``, whose values ``g``
+    a transition into it has just left a rounding error on their wrong side (``wrong_side``, within ``DRIFTED`` of
+    the largest of them), zero for the others. Returns whether any offset is not zero (else the guards need none
+    subtracted).
 
     A reset that puts a state on a guard's boundary puts it there to rounding: an Iwan element that sticks takes the
     stretch of its slip force exactly, and its stick guard ``mu N phi - kd z`` (shared with the other sticking
@@ -133,24 +131,23 @@ def drift_offsets(mode, t, y, p, g, goff):
     zero the guard never fired however far it fell: another element of the same contact reaching its slip force
     later in the step was missed, and it stuck on past it (the guard at ``-9e-3`` of the largest, the Iwan pair at
     166.48 rad/s) until another event's reset let it slip, a step later. Where rounding put the guard above zero it
-    fired in time: the period map jumped between neighbouring values of a parameter. Read minus its offset until the next transition, such a guard
-    starts on the boundary, fires as soon as it falls further and stays quiet while it returns (as the per-contact
-    kernel's ``mark_drifted`` reads its friction guards). A rigid stick's guards and the normal guards keep their
-    values, as there: a rigid slip that ends at the friction limit while the contact unloads is settled by its
-    transition, and a damped contact opens with its penetration still positive and closes where it crosses zero.
+    fired in time: the period map jumped between neighbouring values of a parameter. Read minus its offset until
+    the next transition, such a guard starts on the boundary, fires as soon as it falls further and stays quiet
+    while it returns (as the per-contact kernel's ``mark_drifted`` reads its friction guards). A rigid stick's guards
+    and the normal guards keep their values, as there: a rigid slip that ends at the friction limit while the
+    contact unloads is settled by its transition, and a damped contact opens with its penetration still positive
+    and closes where it crosses zero.
     """
-    guards(mode, t, y, p, g)  # noqa: F821
     scale = 0.0
     for i in range(N_GUARDS[mode]):  # noqa: F821
         if DRIFT_GUARD[mode, i]:  # noqa: F821
             scale = max(scale, abs(g[i]))
+    drifting = False
     for i in range(goff.shape[0]):
         goff[i] = 0.0
-    drifting = False
     for i in range(N_GUARDS[mode]):  # noqa: F821
-        d = GUARD_DIR[mode, i]  # noqa: F821
-        wrong = (d < 0 and g[i] < 0.0) or (d > 0 and g[i] > 0.0)
-        if DRIFT_GUARD[mode, i] and wrong and abs(g[i]) <= DRIFTED * scale:  # noqa: F821
+        drifted = wrong_side(g[i], GUARD_DIR[mode, i]) and abs(g[i]) <= DRIFTED * scale  # noqa: F821
+        if DRIFT_GUARD[mode, i] and drifted:  # noqa: F821
             goff[i] = g[i]
             drifting = True
     return drifting
@@ -408,7 +405,8 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
                     guards(mode, t_sub, ysub, p, gm)  # noqa: F821
                     guards(mode, t, y, p, g1)  # noqa: F821
                     gi = simultaneous_crossing(mode, owner, gm, g1)
-                drifting = drift_offsets(mode, t, y, p, gm, goff)
+                    if gi < 0:   # the last transition: g1 holds the new mode's guards at the event
+                        drifting = drift_offsets(mode, g1, goff)
                 g0_valid = False
             counters[C_STEPS] += 1
             for i in range(n):

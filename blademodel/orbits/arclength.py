@@ -724,9 +724,10 @@ def _kinds_at_kink(found: list, turned: bool) -> list:
     """The special points ``found`` by a step whose stability changed at a kink of the map (one of them located where
     no multiplier lies on the unit circle, :func:`.corrector._off_circle`): where the branch ``turned`` there, those
     at the kink (border collisions too) are a nonsmooth fold; else those off the circle are border collisions,
-    whatever the multiplier nearest the circle. The Iwan pair down in omega at 2000 steps a period reported three
-    Neimark-Sacker bifurcations near 165.56 rad/s with a multiplier of modulus 0.458: the stability changes of an
-    unstable window at kinks, the multiplier nearest the circle a complex one inside it."""
+    whatever the multiplier nearest the circle. The Iwan pair down in omega at 2000 steps a period (its elements'
+    slips missed by the kernel, since mended) reported three Neimark-Sacker bifurcations near 165.56 rad/s with a
+    multiplier of modulus 0.458: the stability changes of an unstable window at kinks, the multiplier nearest the
+    circle a complex one inside it."""
     return [replace(q, kind="nonsmooth-fold") if turned and _at_kink(q) else
             replace(q, kind="border-collision") if _off_circle(q) else q for q in found]
 
