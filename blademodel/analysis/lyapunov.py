@@ -57,12 +57,15 @@ def largest_lyapunov(integrator: HybridIntegrator, y, mode: int, *, start_period
     b = a.copy()
     b[:n] += d0 * scale * direction
     law = integrator.law_states
+    # the reference runs on a copy of its own: a call that goes on from where the last one ended keeps the kernel's
+    # hybrid state of the run (guards read from their boundaries), which a call for the companion would clear
+    reference = integrator.worker()
     mode_a = mode_b = mode
     total = 0.0
     for k in range(start_period, start_period + periods):
         start = (b[:n] - a[:n]) / scale
         law_a, law_b = a[law], b[law]
-        sa, mode_a, _ = integrator.advance(a, mode_a, k, k + 1)
+        sa, mode_a, _ = reference.advance(a, mode_a, k, k + 1)
         sb, mode_b, _ = integrator.advance(b, mode_b, k, k + 1)
         if sa or sb:
             raise RuntimeError(f"integration failed at period {k} while estimating the Lyapunov exponent")

@@ -296,12 +296,14 @@ def initial_mode(t, y, p, g, ytmp):
 
 def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_transient,
               record_every, event_tol, max_events, predicted, tab, rec_t, rec_y, rec_mode, poincare, log_t,
-              log_guard, log_from, log_to, counters):
+              log_guard, log_from, log_to, counters, goff):
     """Integrate excitation periods ``start_period`` to ``end_period`` (exclusive).
 
     Periods before ``n_transient`` are not recorded. A run may be split into calls
     over consecutive period ranges: the record and log positions live in
-    ``counters``, so the pieces fill the same arrays as one call would.
+    ``counters`` and the guards' drift offsets (:func:`drift_offsets`) in ``goff``
+    (in and out; zeros for a run that starts here), so the pieces fill the same
+    arrays and read the same guards as one call would.
 
     The step is ``h = period / steps_per_period``, so ``t = n * period`` falls on
     step ends (the Poincare section). After each (sub)step every guard of the
@@ -311,7 +313,8 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
     the state is taken at the bracket's far end (past the root), the transition is
     applied and the rest of the step follows.
 
-    ``y`` is updated in place. Returns ``(status, mode, t)``.
+    ``y`` is updated in place. Returns ``(status, mode, t)``; on ``STATUS_OK``, ``goff``
+    holds the offsets a call that goes on from ``(y, mode, t)`` is to start with.
     """
     n = y.shape[0]
     h = period / steps_per_period
@@ -333,8 +336,10 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
     d1 = np.empty(ng)
     dm = np.empty(ng)
     dlo = np.empty(ng)
-    goff = np.zeros(ng)   # guards read from their boundaries until the next transition (drift_offsets)
-    drifting = False
+    drifting = False   # guards read from their boundaries until the next transition (drift_offsets)
+    for i in range(ng):
+        if goff[i] != 0.0:
+            drifting = True
     # stages of a tableau method (``tab``: A, b, c; empty for the fused RK4): s^2 + 2 s entries
     s_tab = int(round(math.sqrt(tab.shape[0] + 1.0))) - 1 if tab.shape[0] > 0 else 0
     K = np.empty((s_tab, n))

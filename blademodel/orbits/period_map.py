@@ -47,7 +47,8 @@ class MapRun:
     events : int
         Events crossed.
     modes : ndarray or None
-        The per-contact kernel's contact modes at every step (None for the product-mode kernel).
+        The modes at every step: the per-contact kernel's contact modes (a row a step), the
+        product-mode kernel's mode number (None where the run recorded none).
     anonymous : bool
         The contacts are all alike (a run of a map reduced by a ring's symmetry): the
         signature leaves out which contact an event was at.
