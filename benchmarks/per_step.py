@@ -77,9 +77,9 @@ def generic_runner(mod, integ, y0, mode0, start, end):
     def run():
         y = np.array(y0, dtype=float)
         c = np.zeros(N_COUNTERS, dtype=np.int64)
-        st, mode, _ = mod.integrate(y, mode0, integ.p, integ.period, integ.steps_per_period, start, end, start, 1,
+        st, mode, _, _ = mod.integrate(y, mode0, integ.p, integ.period, integ.steps_per_period, start, end, start, 1,
                                     integ.event_tol, integ.max_events_per_step, False, np.zeros(0), *args, c,
-                                    np.zeros_like(integ._goff))
+                                    np.zeros_like(integ._goff), False)
         return st, y, mode, c
     return run
 

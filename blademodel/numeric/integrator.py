@@ -500,19 +500,13 @@ class HybridIntegrator(Integrator):
         # the next transition (loop.drift_offsets): hybrid state of the run, kept only where a call goes on from
         # the state and mode where the last one ended, as the per-contact kernel keeps its marks.
         end = self._run_end
-        if end is not None and not (abs(end[0] - start_period * self.period) <= 1e-9 * self.period
-                                    and end[2] == int(mode) and np.array_equal(end[1], y)):
-            self._goff[:] = 0.0
-        status, mode, t = self.module.integrate(
+        carry = end is not None and abs(end[0] - start_period * self.period) <= 1e-9 * self.period \
+            and end[2] == mode and np.array_equal(end[1], y)
+        status, mode, t, drifting = self.module.integrate(
             y, int(mode), self.p, self.period, self.steps_per_period, int(start_period), int(end_period),
             int(start_period if n_transient is None else n_transient), int(record_every), self.event_tol,
             self.max_events_per_step, self.event_location == "predicted", self._tableau, rec_t, rec_y, rec_mode,
-            poincare, log_t, log_g, log_f, log_to, counters, self._goff)
-        # only a run that ends with offsets set has any to hand on (the check above then costs nothing)
-        if status == 0 and self._goff.any():
-            self._run_end = (float(t), y.copy(), int(mode))
-        else:
-            if status:
-                self._goff[:] = 0.0
-            self._run_end = None
+            poincare, log_t, log_g, log_f, log_to, counters, self._goff, carry)
+        # only a run that ends with offsets set has any to hand on
+        self._run_end = (t, y.copy(), mode) if status == 0 and drifting else None
         return int(status), int(mode), float(t)

@@ -296,14 +296,15 @@ def initial_mode(t, y, p, g, ytmp):
 
 def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_transient,
               record_every, event_tol, max_events, predicted, tab, rec_t, rec_y, rec_mode, poincare, log_t,
-              log_guard, log_from, log_to, counters, goff):
+              log_guard, log_from, log_to, counters, goff, carry):
     """Integrate excitation periods ``start_period`` to ``end_period`` (exclusive).
 
     Periods before ``n_transient`` are not recorded. A run may be split into calls
     over consecutive period ranges: the record and log positions live in
     ``counters`` and the guards' drift offsets (:func:`drift_offsets`) in ``goff``
-    (in and out; zeros for a run that starts here), so the pieces fill the same
-    arrays and read the same guards as one call would.
+    (in and out; read where ``carry``, the call going on from where the last one
+    ended, else cleared), so the pieces fill the same arrays and read the same guards
+    as one call would.
 
     The step is ``h = period / steps_per_period``, so ``t = n * period`` falls on
     step ends (the Poincare section). After each (sub)step every guard of the
@@ -313,8 +314,9 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
     the state is taken at the bracket's far end (past the root), the transition is
     applied and the rest of the step follows.
 
-    ``y`` is updated in place. Returns ``(status, mode, t)``; on ``STATUS_OK``, ``goff``
-    holds the offsets a call that goes on from ``(y, mode, t)`` is to start with.
+    ``y`` is updated in place. Returns ``(status, mode, t, drifting)``: ``drifting``
+    where ``goff`` ends with offsets set, which a call that goes on from ``(y, mode, t)``
+    is to start with.
     """
     n = y.shape[0]
     h = period / steps_per_period
@@ -338,7 +340,9 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
     dlo = np.empty(ng)
     drifting = False   # guards read from their boundaries until the next transition (drift_offsets)
     for i in range(ng):
-        if goff[i] != 0.0:
+        if not carry:
+            goff[i] = 0.0
+        elif goff[i] != 0.0:
             drifting = True
     # stages of a tableau method (``tab``: A, b, c; empty for the fused RK4): s^2 + 2 s entries
     s_tab = int(round(math.sqrt(tab.shape[0] + 1.0))) - 1 if tab.shape[0] > 0 else 0
@@ -406,7 +410,7 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
                     n_events += 1
                     if n_events > max_events:
                         counters[C_RECORDS] = irec
-                        return STATUS_EVENT_STORM, mode, t
+                        return STATUS_EVENT_STORM, mode, t, drifting
                     guards(mode, t_sub, ysub, p, gm)  # noqa: F821
                     guards(mode, t, y, p, g1)  # noqa: F821
                     gi = simultaneous_crossing(mode, owner, gm, g1)
@@ -417,7 +421,7 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
             for i in range(n):
                 if not math.isfinite(y[i]):
                     counters[C_RECORDS] = irec
-                    return STATUS_NONFINITE, mode, t
+                    return STATUS_NONFINITE, mode, t, drifting
             if recording and (j + 1) % record_every == 0 and irec < rec_t.shape[0]:
                 rec_t[irec] = t
                 rec_mode[irec] = mode
@@ -428,4 +432,4 @@ def integrate(y, mode, p, period, steps_per_period, start_period, end_period, n_
             for i in range(n):
                 poincare[per - n_transient, i] = y[i]
     counters[C_RECORDS] = irec
-    return STATUS_OK, mode, t
+    return STATUS_OK, mode, t, drifting
