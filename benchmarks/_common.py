@@ -38,13 +38,27 @@ def cpu_time() -> float:
 
 
 def machine() -> dict:
-    """Load and environment, for the record."""
+    """Load and environment, for the record: with the CPU's model and the vector instructions Numba may compile for
+    (the same code gives other rounding on another CPU, and other branches)."""
     import numba
     import scipy
     return {"loadavg_1_5_15": [round(x, 2) for x in os.getloadavg()], "cpus": os.cpu_count(),
             "python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
             "numba": numba.__version__, "machine": platform.machine(), "processor": platform.processor(),
-            "date": time.strftime("%Y-%m-%d %H:%M:%S")}
+            **_cpu(), "date": time.strftime("%Y-%m-%d %H:%M:%S")}
+
+
+def _cpu() -> dict:
+    """``cpu_model`` and ``cpu_flags`` (those of FMA and AVX that change a compiled kernel's rounding) from
+    ``/proc/cpuinfo``, where there is one."""
+    try:
+        text = Path("/proc/cpuinfo").read_text()
+    except OSError:
+        return {}
+    fields = dict(line.split(":", 1) for line in text.splitlines() if ":" in line)
+    fields = {k.strip(): v.strip() for k, v in fields.items()}
+    flags = [f for f in fields.get("flags", "").split() if f in ("fma", "avx", "avx2", "avx512f")]
+    return {"cpu_model": fields.get("model name", ""), "cpu_flags": " ".join(flags)}
 
 
 def print_load(tag: str = "") -> list:
