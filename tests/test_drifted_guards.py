@@ -198,3 +198,34 @@ def test_a_call_that_goes_on_is_handed_the_offsets_of_the_last():
     assert not handed[-2].any()
     ig.advance(split.copy(), mode, 20, 21)
     assert not handed[-2].any()
+
+
+def test_the_lyapunov_reference_keeps_its_offsets_between_periods():
+    """The Lyapunov estimate alternates one period of its reference with one of its companion (pulled back each
+    period). On one integrator the companion's calls cleared the reference's offsets every period; the reference now
+    runs on a worker of its own, and each of its calls after one that ended with offsets set (the bilinear pair at
+    290 rad/s ends every period so: measured) is handed them."""
+    from blademodel.analysis.lyapunov import largest_lyapunov
+    ig = _pair_at_290()
+    calls = []   # (handed the offsets, ended with offsets set) of each kernel call, in order
+
+    class Spy:
+        def __init__(self, module):
+            self._module = module
+
+        def __getattr__(self, name):
+            return getattr(self._module, name)
+
+        def integrate(self, *args):
+            out = self._module.integrate(*args)
+            calls.append((bool(args[-1]), bool(out[3])))
+            return out
+
+    y = ig.initial_state()
+    mode = ig.mode_of(y)
+    _, mode, _ = ig.advance(y, mode, 0, 20)
+    ig.module = Spy(ig.module)
+    largest_lyapunov(ig, y, mode, start_period=20, periods=10, scale=np.ones(ig.n_state))
+    reference = calls[0::2]   # the reference's period, then the companion's
+    assert len(calls) == 20 and all(ended for _, ended in reference)
+    assert all(handed for handed, _ in reference[1:])
