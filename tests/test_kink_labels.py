@@ -34,6 +34,19 @@ def test_a_stability_change_off_the_circle_is_a_kink_s(turned):
     assert [q.multiplier for q in _kinds_at_kink(found, turned)] == [q.multiplier for q in found]
 
 
+def test_a_turn_located_off_the_circle_is_a_nonsmooth_fold_both_ways():
+    """The Iwan pair in F0 up from 3 N turns at the kink near 3.712318 N that the branch down from 4 N reports as a
+    nonsmooth fold (tests/test_continuation.py): its location's trials lie on either side at 0.987 and 1.051 to the
+    last, and the point it returns has a multiplier of modulus 0.987, off the circle by more than a continuous one
+    moves over the location's bracket. It was labelled a fold, as the multiplier lay within 0.05 of the circle; it is
+    a nonsmooth fold, as going down. The smooth fold at 3.848 N keeps its label and its multiplier on the circle."""
+    b = continuation(BladePair(friction="iwan", F0=3.0), "F0", 3.0, 5.0, workers=1)
+    assert b.message == "reached F0 = 5"
+    (nf,), (fold,) = b.points("nonsmooth-fold"), b.points("fold")
+    assert 3.7123 < nf.param < 3.7124 and abs(abs(nf.multiplier) - 1) > 1e-2
+    assert 3.84 < fold.param < 3.86 and abs(abs(fold.multiplier) - 1) < 1e-3
+
+
 @pytest.mark.slow
 def test_the_iwan_branch_s_smooth_bifurcations_lie_on_the_circle():
     """The Iwan pair down in omega from 600 to 150 rad/s at 2000 steps a period: every fold, period doubling and
@@ -48,7 +61,8 @@ def test_the_iwan_branch_s_smooth_bifurcations_lie_on_the_circle():
     0.998 to 1.00004 at that value to 3e-10 rad/s, over 1.3e-4 of the scaled state): a fold with multiplier
     1.0000004, 3.1e-4 rad/s below the kink, which the branch down steps over. At the stop before (the same
     continuation code, another environment) the two ways had it the other way round: up reported the kink, as a fold
-    with a multiplier of modulus 1.026, and down a fold on the circle 3e-4 rad/s from it.
+    with a multiplier of modulus 1.026 (a nonsmooth fold now: test_a_turn_located_off_the_circle_is_a_nonsmooth_fold_
+    both_ways), and down a fold on the circle 3e-4 rad/s from it.
 
     With the Iwan elements' missed slips (tests/test_drifted_guards.py) and a rule for the field's column since
     taken out, the branch down reported windows of instability at kinks near 165.56 rad/s, three of their stability

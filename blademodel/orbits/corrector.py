@@ -517,6 +517,11 @@ class _Context:
                 kind = "period-doubling"
             else:
                 kind = "fold" if _turns(p, q, Ta if p is a else None) else "branch-point"
+                if kind == "fold" and abs(abs(mu) - 1.0) > JUMP_CLOSED:
+                    # located with its multiplier off the circle by more than a continuous one moves over the
+                    # location's bracket: the turn lies at a kink (the Iwan pair in F0 up from 3 N, 3.712318 N:
+                    # trials on either side at 0.987 and 1.051 to the last, one failing beside the kink)
+                    kind = "nonsmooth-fold"
             found.append(_special(kind, best, index, mu, jump))
         if a["signature"] != b["signature"]:
             # the largest multiplier of the point before: at the grazing the map is not differentiable, and
