@@ -85,6 +85,22 @@ def _pair_at_290():
     return HybridIntegrator(BladePair(friction="bilinear", omega=290.0).build(), steps_per_period=1000)
 
 
+class _KernelSpy:
+    """A compiled model module whose ``integrate`` calls ``seen(args, out, offsets before the call)`` after each run."""
+
+    def __init__(self, module, seen):
+        self._module, self._seen = module, seen
+
+    def __getattr__(self, name):
+        return getattr(self._module, name)
+
+    def integrate(self, *args):
+        before = args[-2].copy()
+        out = self._module.integrate(*args)
+        self._seen(args, out, before)
+        return out
+
+
 def _kernel_run(ig, y, mode, start, goff):
     """One period of the compiled kernel from ``(start * T, y, mode)`` with the drift offsets ``goff``: its record
     (every step) and its event log."""
@@ -157,19 +173,9 @@ def test_a_call_that_goes_on_is_handed_the_offsets_of_the_last():
     ig = _pair_at_290()
     handed = []   # the offsets each kernel call was handed, and those it ended with
 
-    class Spy:
-        def __init__(self, module):
-            self._module = module
-
-        def __getattr__(self, name):
-            return getattr(self._module, name)
-
-        def integrate(self, *args):
-            goff, carry = args[-2:]
-            handed.append(goff.copy() if carry else np.zeros_like(goff))
-            out = self._module.integrate(*args)
-            handed.append(goff.copy())
-            return out
+    def seen(args, out, before):
+        goff, carry = args[-2:]
+        handed.extend([before if carry else np.zeros_like(goff), goff.copy()])
 
     y0 = ig.initial_state()
     mode0 = ig.mode_of(y0)
@@ -177,7 +183,7 @@ def test_a_call_that_goes_on_is_handed_the_offsets_of_the_last():
     counters = np.zeros(N_COUNTERS, dtype=np.int64)
     ig.advance(whole, mode0, 0, 20, log=log_whole, counters=counters, n_transient=0)
     n_whole = int(counters[C_LOGGED])
-    ig.module = Spy(ig.module)
+    ig.module = _KernelSpy(ig.module, seen)
     split, mode, log_split = y0.copy(), mode0, ig.log_buffer(4000)
     counters = np.zeros(N_COUNTERS, dtype=np.int64)
     for k in range(20):
@@ -209,22 +215,10 @@ def test_the_lyapunov_reference_keeps_its_offsets_between_periods():
     ig = _pair_at_290()
     calls = []   # (handed the offsets, ended with offsets set) of each kernel call, in order
 
-    class Spy:
-        def __init__(self, module):
-            self._module = module
-
-        def __getattr__(self, name):
-            return getattr(self._module, name)
-
-        def integrate(self, *args):
-            out = self._module.integrate(*args)
-            calls.append((bool(args[-1]), bool(out[3])))
-            return out
-
     y = ig.initial_state()
     mode = ig.mode_of(y)
     _, mode, _ = ig.advance(y, mode, 0, 20)
-    ig.module = Spy(ig.module)
+    ig.module = _KernelSpy(ig.module, lambda args, out, before: calls.append((bool(args[-1]), bool(out[3]))))
     largest_lyapunov(ig, y, mode, start_period=20, periods=10, scale=np.ones(ig.n_state))
     reference = calls[0::2]   # the reference's period, then the companion's
     assert len(calls) == 20 and all(ended for _, ended in reference)
