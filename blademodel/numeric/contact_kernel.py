@@ -650,7 +650,7 @@ class ContactIntegrator(Integrator):
             For an argument the kernel cannot take
             (:func:`~blademodel.numeric.integrator.check_advance_arguments`).
         """
-        from .integrator import check_advance_arguments
+        from .integrator import check_advance_arguments, goes_on
         if check:
             check_advance_arguments(self, y, mode, start_period, end_period, n_transient, record=record, poincare=poincare,
                                     log=log, counters=counters, record_every=record_every, stats=stats, forces=forces)
@@ -675,9 +675,7 @@ class ContactIntegrator(Integrator):
         # A contact fired before its own root reads its guards shifted until its next transition
         # (contact_guards.mark_near): hybrid state of the run, kept only where a call goes on from the
         # state and modes where the last one ended.
-        end = self._run_end
-        if end is None or not (abs(end[0] - start_period * self.period) <= 1e-9 * self.period
-                               and np.array_equal(end[1], y) and np.array_equal(end[2], cm)):
+        if not goes_on(self._run_end, start_period, self.period, y, cm):
             self._clear_near_marks()
         status, t = self.module.integrate(
             y, cm, self.I, self.R, self.WI, self.WF, self.SC, self.GS, self.period, self.steps_per_period, int(start_period),

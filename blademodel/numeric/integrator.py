@@ -168,6 +168,14 @@ def check_advance_arguments(integ: "Integrator", y, mode, start_period, end_peri
         _check_array("stats", stats, np.empty(1), N_STATS)
 
 
+def goes_on(run_end, start_period: int, period: float, y: np.ndarray, mode) -> bool:
+    """Whether a call of ``advance`` from ``(y, mode)`` at ``start_period`` goes on from where the last run ended,
+    ``run_end = (t, y, mode)`` (None: no run, or one whose hybrid state need not be kept): the kernels keep such a
+    run's hybrid state (guards read from their boundaries) only then."""
+    return run_end is not None and abs(run_end[0] - start_period * period) <= 1e-9 * period \
+        and np.array_equal(run_end[2], mode) and np.array_equal(run_end[1], y)
+
+
 def checked_parameter_values(p_raw, names) -> np.ndarray:
     """``p_raw`` as floats, one finite value for each parameter of ``names`` (``with_parameter_values``).
 
@@ -499,9 +507,7 @@ class HybridIntegrator(Integrator):
         # A friction guard a transition left a rounding error on its wrong side is read from its boundary until
         # the next transition (loop.drift_offsets): hybrid state of the run, kept only where a call goes on from
         # the state and mode where the last one ended, as the per-contact kernel keeps its marks.
-        end = self._run_end
-        carry = end is not None and abs(end[0] - start_period * self.period) <= 1e-9 * self.period \
-            and end[2] == mode and np.array_equal(end[1], y)
+        carry = goes_on(self._run_end, start_period, self.period, y, mode)
         status, mode, t, drifting = self.module.integrate(
             y, int(mode), self.p, self.period, self.steps_per_period, int(start_period), int(end_period),
             int(start_period if n_transient is None else n_transient), int(record_every), self.event_tol,
