@@ -58,6 +58,11 @@ def _wave_point(param, broken):
     return {"param": param, "state": np.asarray(broken, dtype=float), "Y": Y}
 
 
+def _kept(q):
+    """A point's orbit, as every one of these keeps it."""
+    return q["Y"]
+
+
 def _sym():
     return SimpleNamespace(n=2, fraction=2, periods=1, turned=lambda y: y)
 
@@ -70,27 +75,27 @@ def test_a_crossing_branch_on_g2_ends_where_its_symmetry_breaking_changes_sign_a
     branch) no value inside the step is claimed."""
     path = [_wave_point(1.0, [0.0, 0.0]), _wave_point(2.0, [1.0, 0.1]), _wave_point(3.0, [0.5, 0.0]),
             _wave_point(4.0, [-0.5, 0.0])]
-    stop = _back_to_the_waves(_sym(), "omega")
+    stop = _back_to_the_waves(_sym(), "omega", _kept)
     assert [stop(path[:k]) for k in range(1, 4)] == [None] * 3
     assert stop(path).startswith("came back to the travelling waves near omega = 3.5, where they have another "
                                  "branch point (between its points at 3 and 4;")
     other = _special(3.8, [0.0, 0.0])
-    named = _back_to_the_waves(_sym(), "omega", [_special(9.0, [0.0, 0.0]), other])
+    named = _back_to_the_waves(_sym(), "omega", _kept, [_special(9.0, [0.0, 0.0]), other])
     assert named(path[:3]) is None
     assert named(path).startswith("came back to the travelling waves at their branch point omega = 3.8 (between "
                                   "its points at 3 and 4;")
     landed = path[:3] + [_wave_point(4.0, [1e-9, 0.0])]
-    stop_landed = _back_to_the_waves(_sym(), "omega")
+    stop_landed = _back_to_the_waves(_sym(), "omega", _kept)
     assert stop_landed(landed[:3]) is None
     assert stop_landed(landed).startswith("came back to the travelling waves between its points at 3 and 4, where "
                                           "they have another branch point (its last point is a travelling wave")
     # a step that turns across the meeting: the vertex of the parabola through both points (the field even in the
     # breaking, which G reverses), not a value between them
     turned = path[:2] + [_wave_point(3.2 - 0.4 ** 2, [0.4, 0.0]), _wave_point(3.2 - 0.3 ** 2, [-0.3, 0.0])]
-    stop_turned = _back_to_the_waves(_sym(), "omega")
+    stop_turned = _back_to_the_waves(_sym(), "omega", _kept)
     assert stop_turned(turned[:3]) is None
     assert stop_turned(turned).startswith("came back to the travelling waves near omega = 3.2, where")
     # a branch that only comes close to the waves and leaves them again goes on
     close = path[:3] + [_wave_point(4.0, [0.01, 0.0])]
-    stop_close = _back_to_the_waves(_sym(), "omega")
+    stop_close = _back_to_the_waves(_sym(), "omega", _kept)
     assert all(stop_close(close[:k]) is None for k in range(1, 5))

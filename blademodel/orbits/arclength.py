@@ -54,7 +54,7 @@ from .. import interrupts
 from ..numeric.blas_threads import blas_threads_for
 from .background import Locator, PendingPoint, resolve
 from .branch import Branch, ContinuationInterrupted, SpecialPoint  # noqa: F401  (SpecialPoint: the public name)
-from .corrector import _Context, _at_kink, _field_bracket, _off_circle, _special, _tangent, _unstable_count
+from .corrector import KEPT_ORBITS, _Context, _at_kink, _field_bracket, _off_circle, _special, _tangent, _unstable_count
 from .family import _Family
 from .period_map import FlowError, _copy, _key, kernel_mode
 from .self_overlap import NEAR, SelfOverlap, segment_ratios
@@ -671,6 +671,8 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         special += found
         new["n_special"] = len(special)
         pts.append(new)
+        if len(pts) > KEPT_ORBITS:
+            pts[-KEPT_ORBITS - 1].pop("Y", None)
         # each state scaled by its excursion on the newest orbit: amplitudes that grow a
         # hundredfold through a resonance do not shrink the steps a hundredfold
         taken = float(np.linalg.norm(X_new - X))

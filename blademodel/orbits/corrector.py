@@ -77,6 +77,10 @@ def _tangent(A, previous):
     return t if np.dot(t, previous) >= 0 else -t
 
 
+#: The branch points that keep their orbit's record (``"Y"``, every step of the period: 64 kB on the pair, about 1 MB on
+#: a 24-blade ring): the last ones. Older points drop it (:meth:`_Context.orbit` makes it again where asked), so that a
+#: branch's memory does not grow with its points by the orbit's size.
+KEPT_ORBITS = 2
 #: :meth:`_Context.column_rule` takes a Jacobian's field column from the tangent of the branch's last points where
 #: that tangent's estimated error, relative to its field component, is at most this (else a difference quotient).
 COLUMN_ACCURACY = 1e-2
@@ -477,6 +481,17 @@ class _Context:
                 "magnitude": np.maximum(top, -bottom),   # each state's largest |value| on the orbit
                 "J": J, "dl": A[:, n] * self.scale / self.span}
 
+    def orbit(self, q) -> np.ndarray:
+        """The orbit of the branch point ``q`` at every step (physical states, both ends included): the record its run
+        left, where the point still keeps it (a branch keeps its last :data:`KEPT_ORBITS` points'), else that run
+        made again, from the point's state and mode at its value of the field (the same orbit to rounding: the map
+        there may be another integrator than the one that made it, the branch's first built from the model and
+        the others its copies, whose derived parameters can round otherwise)."""
+        Y = q.get("Y")
+        if Y is None:
+            Y = self.fam.map_at(q["param"]).run(q["state"], q["mode"]).period_orbit()
+        return Y
+
     def detect(self, a, b, Xa, Ta, mode, index, locate_tol, before=None):
         """The bifurcations between consecutive points ``a`` and ``b``, each located on the arclength.
 
@@ -533,9 +548,10 @@ class _Context:
             def finish(at):
                 return _special("grazing", at, index, multiplier)
             # located later, elsewhere (.background): on what the step has now (the points' dicts are
-            # rescaled later, their arrays never changed in place); a border collision whose bracket holds
-            # the grazing is placed there (background.resolve): that is its kink
-            args = (self.scale.copy(), dict(a), dict(b), Xa.copy(), Ta, _copy(mode), tol)
+            # rescaled later, their arrays never changed in place), without their orbits' records, which the
+            # location does not read and which the task would keep to the branch's end (KEPT_ORBITS); a border
+            # collision whose bracket holds the grazing is placed there (background.resolve): that is its kink
+            args = (self.scale.copy(), _without_orbit(a), _without_orbit(b), Xa.copy(), Ta, _copy(mode), tol)
             found.append(PendingPoint(lambda ctx: _locate_grazings_in(ctx, *args), self.locator, finish, index,
                                       bracket, unlocated=_unlocated(b, _field_bracket(Xa, b["X"], self.span))))
         return found
@@ -864,6 +880,11 @@ def _field_bracket(X_lo, X_hi, span) -> tuple:
     """The field's values at two scaled points, lower first."""
     lo, hi = sorted((float(X_lo[-1] * span), float(X_hi[-1] * span)))
     return lo, hi
+
+
+def _without_orbit(q: dict) -> dict:
+    """A copy of the branch point ``q`` without its orbit's record (``"Y"``)."""
+    return {k: v for k, v in q.items() if k != "Y"}
 
 
 def _unlocated(b: dict, bracket) -> dict:

@@ -195,7 +195,7 @@ def _switched(ctx, point: SpecialPoint, y, mode, v, is_new, old: str, bounds, *,
                         f"critical eigenvector")
     T1 = _tangent(A1, X1 - X0)
     pts = [ctx.point(X0, mode, A0), ctx.point(X1, m1, A1)]
-    X, T, A = ctx.rescale(_state_scale(pts[-1]["Y"], _n_coordinates(fam.map_at(point.param).integrator),
+    X, T, A = ctx.rescale(_state_scale(ctx.orbit(pts[-1]), _n_coordinates(fam.map_at(point.param).integrator),
                                        ctx.discrete),
                           X1, T1, A1)
     pts[-1]["X"], pts[-1]["A"] = X, A
@@ -298,7 +298,7 @@ def branch_point_branch(config, name: str, point: SpecialPoint, start: float, st
     ends = []
     others = [] if crossed is None else [q for q in crossed.points("branch-point") if q.param != point.param]
     if fam.symmetry is not None:   # followed on G^2: it ends where it comes back to the travelling waves
-        ends.append(_back_to_the_waves(CyclicSymmetry(fam.config_at(point.param), ig), name, others))
+        ends.append(_back_to_the_waves(CyclicSymmetry(fam.config_at(point.param), ig), name, ctx.orbit, others))
     if others:
         ends.append(_back_to(ctx, others, ds_max, "met the branch it crossed again at its branch point",
                              "past it the crossing branch goes on beyond the branch it crossed"))
@@ -369,7 +369,7 @@ def _back_to(ctx, others: list, reach: float, met: str, past: str, splitting=Non
 ON_THE_WAVES = 1e-6
 
 
-def _back_to_the_waves(sym, name: str, others=()):
+def _back_to_the_waves(sym, name: str, orbit, others=()):
     """For a crossing branch followed on ``G^2``: ``stop(pts)`` for :func:`~.arclength._follow`, which ends it
     where it passes the travelling waves again.
 
@@ -383,10 +383,11 @@ def _back_to_the_waves(sym, name: str, others=()):
     at the crossed branch's branch point in ``others`` within a step of the last two
     points' values of the field, where there is one; else at the vertex the projections
     give (:func:`_vertex`), unless the step landed on the waves (nothing locates the
-    meeting inside it then).
+    meeting inside it then). ``orbit(q)``: a branch point's orbit at every step
+    (:meth:`.corrector._Context.orbit`; older points keep none).
     """
     def broken(q):
-        Y = q["Y"]
+        Y = orbit(q)
         return q["state"][:sym.n] - sym.turned(Y[(Y.shape[0] - 1) // (sym.fraction * sym.periods)])
 
     first = []
