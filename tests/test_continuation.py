@@ -642,8 +642,9 @@ def test_a_step_back_in_the_field_needs_a_turn_between_its_ends():
     from types import SimpleNamespace
 
     from blademodel.orbits.arclength import _ran_back_unturned
-    ctx = SimpleNamespace(unknowns=lambda q: q["X"])
-    pts = [{"X": np.array([0.1 * k, 0.0, 0.0, 0.01 * k])} for k in range(5)]   # (y, lambda) rising together
+    ctx = SimpleNamespace(unknowns=lambda q: q["X"],
+                          multipliers=lambda A: np.linalg.eigvals(A[:, :-1] + np.eye(A.shape[0])))
+    pts = [{"X": np.array([0.1 * k, 0.0, 0.0, 0.01 * k]), "unstable": 0} for k in range(5)]   # (y, lambda) rising
     X, T = pts[-1]["X"], np.array([1.0, 0.0, 0.0, 0.1]) / np.hypot(1.0, 0.1)
     A = np.hstack([np.diag([-0.5, -0.3, -0.2]), np.ones((3, 1))])      # every multiplier inside: det < 0
     A_fold = A.copy()
@@ -661,6 +662,53 @@ def test_a_step_back_in_the_field_needs_a_turn_between_its_ends():
     for kind in ("fold", "period-doubling"):
         mine, theirs = sorted(q.param for q in b.points(kind)), sorted(q.param for q in ref.points(kind))
         assert len(mine) == len(theirs) and np.allclose(mine, theirs, rtol=0, atol=1e-3)
+
+
+def test_a_step_back_beside_the_part_passed_with_its_stability_is_refused_across_a_kink_too():
+    """Past a kink the last point can lie on an arm whose stability differs from the part passed, so that the
+    Jacobians at the step's two ends tell of a turn between them. A correction that lands back on the part passed,
+    going back along it, beside a point whose stability it has, is still refused: a turn changes the parity of the
+    real multipliers above 1, so the arm after a turn differs in stability from the part it comes back beside.
+    Not refused: a new point of the other stability there (the arm after a turn), nor one that goes along the part
+    passed the way it was passed (a closed branch come round, which the self-overlap test reports)."""
+    from types import SimpleNamespace
+
+    from blademodel.orbits.arclength import _ran_back_unturned
+    ctx = SimpleNamespace(unknowns=lambda q: q["X"],
+                          multipliers=lambda A: np.linalg.eigvals(A[:, :-1] + np.eye(A.shape[0])))
+    # down in the field: five stable points, then two unstable ones past a kink between points 4 and 5
+    pts = [{"X": np.array([0.1 * k, 0.0, 0.0, -0.01 * k]), "unstable": int(k > 4)} for k in range(7)]
+    X = pts[-1]["X"]
+    T = np.array([1.0, 0.0, 0.0, -0.1]) / np.hypot(1.0, 0.1)
+    stable = np.hstack([np.diag([-0.5, -0.3, -0.2]), np.ones((3, 1))])
+    unstable = stable.copy()
+    unstable[0, 0] = 0.4                                   # one real multiplier above 1
+    back = np.array([0.25, 0.0, 0.0, -0.025])              # on the segment from point 2 to point 3, behind X
+    twice = stable.copy()
+    twice[0, 0], twice[1, 1] = 0.4, 0.5                    # two real multipliers above 1: det's sign as stable's
+    assert _ran_back_unturned(ctx, pts, X, back, T, unstable, stable, 0.05)
+    assert not _ran_back_unturned(ctx, pts, X, back, T, unstable, twice, 0.05)   # another stability there
+    # the same landing on a branch that passed those points going up in the field: it goes along them
+    up = [dict(q, X=q["X"] * np.array([1.0, 1.0, 1.0, -1.0])) for q in pts[:5]] + pts[5:]
+    assert not _ran_back_unturned(ctx, up, X, back * np.array([1.0, 1.0, 1.0, -1.0]), -T, unstable, stable, 0.05)
+    assert not _ran_back_unturned(ctx, pts, X, np.array([0.25, 0.5, 0.0, -0.025]), T, unstable, stable, 0.05)
+
+
+@pytest.mark.slow
+def test_the_eight_element_iwan_pair_gets_down_through_its_kinks_near_395_43():
+    """The pair with eight Iwan elements, down from 410 to 380 rad/s at 1000 steps a period: its stable arm turns
+    unstable at a kink at 395.42962 rad/s, turns at 395.42951 onto a second unstable arm that goes back up, and that
+    one turns at 396.246 onto the stable arm going down, the arms within 1e-3 of the scaled state of each other. A
+    correction next to the first turn landed back on the stable arm already passed (the Jacobians at the step's
+    ends telling of a turn between them), and the branch retraced itself, also at half and a quarter of the step.
+    Now it gets down to 380 rad/s with both turns, unstable between them and stable past the second."""
+    cfg = BladePair(friction="iwan", friction_options={"elements": 8})
+    b = continuation(cfg, "omega", 410.0, 380.0, steps_per_period=1000, max_points=600, workers=1)
+    assert b.message.startswith("reached omega = 380")
+    turns = sorted(q.param for q in b.points("nonsmooth-fold"))
+    assert len(turns) == 2 and abs(turns[0] - 395.4295) < 1e-3 and abs(turns[1] - 396.2464) < 1e-3
+    low, high = (max(q.index for q in b.special if abs(q.param - t) < 1e-3) for t in turns)
+    assert not b.stable[low + 1:high].any() and b.stable[high + 1:].all() and b.params[-1] <= 380.0
 
 
 @pytest.mark.parametrize("ds_max", [0.02, 0.05, 0.2])

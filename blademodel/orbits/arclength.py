@@ -506,7 +506,8 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             # steps shrunk to 6.3e-3 at 261.432 rad/s, onto it at 266.069, between two of its points)
             ctx.why = "the correction converged back onto the branch already passed"
             X_new = None
-        if X_new is not None and A is not None and _ran_back_unturned(ctx, pts, X, X_new, T, A, A_new, h):
+        A_last = A if A is not None else pts[-1].get("A")   # (a jump across a kink drops A: the last point's)
+        if X_new is not None and A_last is not None and _ran_back_unturned(ctx, pts, X, X_new, T, A_last, A_new, h):
             # behind the last point in the field, with no turn between them: not the branch ahead (the Iwan pair at
             # 2000 steps a period, from 157.376 back to 157.131 rad/s, every orbit there stable and their events
             # changing at every step: it then went over its points again and stopped). As a failed correction
@@ -1073,13 +1074,39 @@ def _ran_back_unturned(ctx, pts, X, X_new, T, A, A_new, step) -> bool:
     symmetry) it does not, but a point past that vertex is the image of one passed, not a
     point on the polyline through the points passed (``pts``, the last one ``X`` among them,
     :func:`_on_polyline`), which this asks too.
+
+    Where the last point lies past a kink, on an arm of another stability than the part passed
+    (its Jacobian's sign differs from the new point's with no turn between them), a correction on
+    that polyline is refused too where it goes back along the part passed beside a point of its
+    own stability: the arm after a turn differs in stability from the part it comes back beside.
+    Measured on the pair with eight Iwan elements down in ``omega`` at 1000 steps a period: the
+    stable arm turns unstable at a kink at 395.42962 rad/s and the branch turns at 395.42951 onto
+    a second unstable arm; from the first unstable arm, next to the turn, a correction (and a jump
+    along the secant, which keeps no Jacobian: ``A`` is then the last point's) landed back on the
+    stable arm, and the branch retraced it; refused, the shots for the other arm find the second one.
     """
     if float(X_new[-1] - X[-1]) * float(T[-1]) >= 0 or len(pts) < 2:
         return False
-    n = A.shape[0]
-    if np.linalg.slogdet(A[:, :n])[0] * np.linalg.slogdet(A_new[:, :n])[0] <= 0:
+    P = np.array([ctx.unknowns(q) for q in pts])
+    a, seg = P[:-1] - X_new, P[1:] - P[:-1]
+    near = np.flatnonzero(segment_ratios(a, P[1:] - X_new, step) <= NEAR)
+    if near.size == 0:
         return False
-    return _on_polyline(np.array([ctx.unknowns(q) for q in pts]), X_new, step)
+    n = A.shape[0]
+    if np.linalg.slogdet(A[:, :n])[0] * np.linalg.slogdet(A_new[:, :n])[0] > 0:
+        return True
+    # The Jacobians tell of a turn between the last point and the new one. But where the last point lies on an arm
+    # past a kink, the correction can land back on the arm before it, which no turn leads onto: a turn changes the
+    # parity of the real multipliers above 1, so the arm after it differs in stability from the part it comes
+    # back beside. Landed on the part passed, going back along it, beside a point of its own stability: retraced
+    count = _unstable_count(ctx.multipliers(A_new))
+    way = float(X_new[-1] - X[-1])
+    for k in near:
+        t = -float(np.dot(a[k], seg[k])) / max(float(np.dot(seg[k], seg[k])), 1e-300)
+        beside = pts[k] if t < 0.5 else pts[k + 1]
+        if beside["unstable"] == count and float(seg[k][-1]) * way < 0:
+            return True
+    return False
 
 
 def _oriented(T_new, A_new, A, T):
