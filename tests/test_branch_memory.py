@@ -14,7 +14,7 @@ import numpy as np
 
 import blademodel.orbits.arclength as arclength
 from blademodel.orbits import continuation
-from blademodel.orbits.corrector import KEPT_ORBITS, _Context
+from blademodel.orbits.corrector import KEPT_JACOBIANS, KEPT_ORBITS, _Context
 from blademodel.zheng2022 import BladePair
 
 CFG = BladePair(friction="bilinear")
@@ -52,7 +52,7 @@ def test_older_points_drop_their_orbit_records_and_get_the_same_orbit_again(monk
 
     def recording(self, X, mode, A):
         q = point(self, X, mode, A)
-        made[id(q)] = q["Y"].copy()
+        made[id(q)] = q["Y"].copy(), q["J"].copy()
         return q
 
     seen = {}
@@ -69,6 +69,35 @@ def test_older_points_drop_their_orbit_records_and_get_the_same_orbit_again(monk
     assert len(pts) == len(b.params) == 12
     assert [("Y" in q) for q in pts] == [False] * (len(pts) - KEPT_ORBITS) + [True] * KEPT_ORBITS
     for q in pts:
-        Y = made[id(q)]
+        Y = made[id(q)][0]
         np.testing.assert_allclose(ctx.orbit(q), Y, rtol=0, atol=1e-13 * np.abs(Y).max())
-    assert all(np.array_equal(ctx.orbit(q), made[id(q)]) for q in pts[1:])
+    assert all(np.array_equal(ctx.orbit(q), made[id(q)][0]) for q in pts[1:])
+
+
+def test_older_points_drop_their_monodromy_matrix_and_get_it_again_from_their_scaled_jacobian(monkeypatch):
+    """Only the last :data:`KEPT_JACOBIANS` points of a branch (and its first, which keeps no scale for its scaled
+    Jacobian) hold their monodromy matrix when it ends; any other's (:meth:`_Context.monodromy`) is its scaled
+    Jacobian brought back to physical units in the scale it was stored in: the matrix the point had, to rounding."""
+    made = {}
+    point = _Context.point
+
+    def recording(self, X, mode, A):
+        q = point(self, X, mode, A)
+        made[id(q)] = q["J"].copy()
+        return q
+
+    seen = {}
+    assemble = arclength._assemble
+
+    def keeping(ctx, pts, *args, **kwargs):
+        seen["ctx"], seen["pts"] = ctx, list(pts)
+        return assemble(ctx, pts, *args, **kwargs)
+
+    monkeypatch.setattr(_Context, "point", recording)
+    monkeypatch.setattr(arclength, "_assemble", keeping)
+    continuation(CFG, "omega", 280.0, 300.0, max_points=12, workers=1)
+    pts, ctx = seen["pts"], seen["ctx"]
+    assert [("J" in q) for q in pts] == [True] + [False] * (len(pts) - 1 - KEPT_JACOBIANS) + [True] * KEPT_JACOBIANS
+    for q in pts:
+        J = made[id(q)]
+        np.testing.assert_allclose(ctx.monodromy(q), J, rtol=0, atol=1e-12 * np.abs(J).max())

@@ -54,7 +54,8 @@ from .. import interrupts
 from ..numeric.blas_threads import blas_threads_for
 from .background import Locator, PendingPoint, resolve
 from .branch import Branch, ContinuationInterrupted, SpecialPoint  # noqa: F401  (SpecialPoint: the public name)
-from .corrector import KEPT_ORBITS, _Context, _at_kink, _field_bracket, _off_circle, _special, _tangent, _unstable_count
+from .corrector import (KEPT_JACOBIANS, KEPT_ORBITS, _Context, _at_kink, _field_bracket, _off_circle, _special,
+                        _tangent, _unstable_count)
 from .family import _Family
 from .period_map import FlowError, _copy, _key, kernel_mode
 from .self_overlap import NEAR, SelfOverlap, segment_ratios
@@ -672,13 +673,13 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         special += found
         new["n_special"] = len(special)
         pts.append(new)
-        if len(pts) > KEPT_ORBITS:
-            pts[-KEPT_ORBITS - 1].pop("Y", None)
         # each state scaled by its excursion on the newest orbit: amplitudes that grow a
         # hundredfold through a resonance do not shrink the steps a hundredfold
         taken = float(np.linalg.norm(X_new - X))
         X, T, A = ctx.rescale(_scale_of_excursions(new["magnitude"], n_q, ctx.discrete), X_new, T_new, A_new)
         new["X"], new["A"], new["T"] = X, A, T   # (T: to come back to, after a wrong turn)
+        new["scale"] = ctx.scale                 # (the scale A is in: for its monodromy matrix, once dropped)
+        _shed(pts)
         m = m_new
         h = min(h * 1.5, ds_max) if iterations <= 4 else (h if iterations <= 8 else h / 2)
         if len(pts) > 1 and new["regular"]:
@@ -721,6 +722,17 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
         message += (f" (it turned back onto itself after a wrong turn near {name} = {value:.6g} and took the turn "
                     f"again from before it at ds_max = {shorter:g})")
     return message
+
+
+def _shed(pts) -> None:
+    """Drop from the older branch points what only the last ones need: the orbit's record (the last
+    :data:`~.corrector.KEPT_ORBITS` keep it) and the monodromy matrix (the last
+    :data:`~.corrector.KEPT_JACOBIANS`; a point that keeps no scale for its ``A`` keeps it), so that a branch's
+    memory does not grow with its points by an orbit and a matrix a point."""
+    if len(pts) > KEPT_ORBITS:
+        pts[-KEPT_ORBITS - 1].pop("Y", None)
+    if len(pts) > KEPT_JACOBIANS and "scale" in pts[-KEPT_JACOBIANS - 1]:
+        pts[-KEPT_JACOBIANS - 1].pop("J", None)
 
 
 def _kinds_at_kink(found: list, turned: bool) -> list:
@@ -1037,7 +1049,7 @@ def _other_arm(ctx, pts, X, mode, reach, fractions=(1e-5, 1e-4, 1e-3), displacem
     away is another branch, not the other arm.
     """
     last = pts[-1]
-    mu, V = np.linalg.eig(last["J"])
+    mu, V = np.linalg.eig(ctx.monodromy(last))
     k = int(np.argmax(np.abs(mu)))
     if abs(mu[k]) <= 1.0 or abs(mu[k].imag) > 1e-9 * abs(mu[k]):
         return None, mode, None

@@ -81,6 +81,11 @@ def _tangent(A, previous):
 #: a 24-blade ring): the last ones. Older points drop it (:meth:`_Context.orbit` makes it again where asked), so that a
 #: branch's memory does not grow with its points by the orbit's size.
 KEPT_ORBITS = 2
+#: The branch points that keep their monodromy matrix (``"J"``, physical units, beside the scaled Jacobian ``"A"`` that
+#: every point keeps): the last ones, whose matrices the predictor extrapolates. Older points drop it
+#: (:meth:`_Context.monodromy` rebuilds it from ``"A"`` where a branch goes back to them), halving what a point keeps of
+#: its Jacobians: ``n (n + 1)`` numbers, 1.2 MB on a 96-blade ring.
+KEPT_JACOBIANS = 3
 #: :meth:`_Context.column_rule` takes a Jacobian's field column from the tangent of the branch's last points where
 #: that tangent's estimated error, relative to its field component, is at most this (else a difference quotient).
 COLUMN_ACCURACY = 1e-2
@@ -432,11 +437,18 @@ class _Context:
         """The scaled unknowns ``X`` (state, then field) of the branch point ``q`` in the current state scale."""
         return np.append(q["state"] / self.scale, q["param"] / self.span)
 
+    def monodromy(self, q) -> np.ndarray:
+        """The monodromy matrix (physical units) of the branch point ``q``: the one it keeps (the last
+        :data:`KEPT_JACOBIANS` points keep theirs), else from its scaled Jacobian ``A`` in the scale it was stored in
+        (the same matrix to rounding)."""
+        J = q.get("J")
+        return J if J is not None else self._physical(q["A"], q["scale"])
+
     def _jacobian_of(self, q):
         """The scaled Jacobian of the branch point ``q`` in the current state scale."""
         n = self.n
         A = np.empty((n, n + 1))
-        A[:, :n] = (q["J"] - np.eye(n)) * self.scale[None, :] / self.scale[:, None]
+        A[:, :n] = (self.monodromy(q) - np.eye(n)) * self.scale[None, :] / self.scale[:, None]
         A[:, n] = q["dl"] * self.span / self.scale
         return A
 
@@ -450,10 +462,12 @@ class _Context:
         sym = self.fam.symmetry
         return _largest_first(np.linalg.eigvals(J if sym is None else sym.monodromy(J)))
 
-    def _physical(self, A):
-        """The monodromy matrix in physical units from the scaled Jacobian ``A``."""
+    def _physical(self, A, scale=None):
+        """The monodromy matrix in physical units from the scaled Jacobian ``A`` (in ``scale``, by default the
+        current state scale)."""
         n = self.n
-        return A[:, :n] * self.scale[:, None] / self.scale[None, :] + np.eye(n)
+        scale = self.scale if scale is None else scale
+        return A[:, :n] * scale[:, None] / scale[None, :] + np.eye(n)
 
     def point(self, X, mode, A):
         """The branch point's record from its scaled unknowns and Jacobian."""
