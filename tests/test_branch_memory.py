@@ -42,21 +42,16 @@ def test_a_branch_s_memory_grows_by_far_less_than_an_orbit_record_a_point():
     assert (long - short) / (n_long - n_short) < 0.25 * record
 
 
-def test_older_points_drop_their_orbit_records_and_get_the_same_orbit_again(monkeypatch):
-    """Only the last :data:`KEPT_ORBITS` points of a branch hold their orbit's record when it ends; any other's
-    orbit, asked for (:meth:`_Context.orbit`), is its run made again: the record the point had (to the bit but for
-    the first point's, made by the integrator built from the model, whose derived parameters round otherwise than
-    the copies' the family makes at a value: measured 3e-15 of the orbit's size)."""
-    made = {}
-    point = _Context.point
+def _kept_points(monkeypatch):
+    """A 12-point branch of the pair from 280 rad/s, as its points are when it ends, with the context that made
+    them and, by the id of each point, its orbit record and monodromy matrix as it was made: ``(pts, ctx, made)``."""
+    made, seen = {}, {}
+    point, assemble = _Context.point, arclength._assemble
 
     def recording(self, X, mode, A):
         q = point(self, X, mode, A)
         made[id(q)] = q["Y"].copy(), q["J"].copy()
         return q
-
-    seen = {}
-    assemble = arclength._assemble
 
     def keeping(ctx, pts, *args, **kwargs):
         seen["ctx"], seen["pts"] = ctx, list(pts)
@@ -65,8 +60,16 @@ def test_older_points_drop_their_orbit_records_and_get_the_same_orbit_again(monk
     monkeypatch.setattr(_Context, "point", recording)
     monkeypatch.setattr(arclength, "_assemble", keeping)
     b = continuation(CFG, "omega", 280.0, 300.0, max_points=12, workers=1)
-    pts, ctx = seen["pts"], seen["ctx"]
-    assert len(pts) == len(b.params) == 12
+    assert len(seen["pts"]) == len(b.params) == 12
+    return seen["pts"], seen["ctx"], made
+
+
+def test_older_points_drop_their_orbit_records_and_get_the_same_orbit_again(monkeypatch):
+    """Only the last :data:`KEPT_ORBITS` points of a branch hold their orbit's record when it ends; any other's
+    orbit, asked for (:meth:`_Context.orbit`), is its run made again: the record the point had (to the bit but for
+    the first point's, made by the integrator built from the model, whose derived parameters round otherwise than
+    the copies' the family makes at a value: measured 3e-15 of the orbit's size)."""
+    pts, ctx, made = _kept_points(monkeypatch)
     assert [("Y" in q) for q in pts] == [False] * (len(pts) - KEPT_ORBITS) + [True] * KEPT_ORBITS
     for q in pts:
         Y = made[id(q)][0]
@@ -78,26 +81,8 @@ def test_older_points_drop_their_monodromy_matrix_and_get_it_again_from_their_sc
     """Only the last :data:`KEPT_JACOBIANS` points of a branch (and its first, which keeps no scale for its scaled
     Jacobian) hold their monodromy matrix when it ends; any other's (:meth:`_Context.monodromy`) is its scaled
     Jacobian brought back to physical units in the scale it was stored in: the matrix the point had, to rounding."""
-    made = {}
-    point = _Context.point
-
-    def recording(self, X, mode, A):
-        q = point(self, X, mode, A)
-        made[id(q)] = q["J"].copy()
-        return q
-
-    seen = {}
-    assemble = arclength._assemble
-
-    def keeping(ctx, pts, *args, **kwargs):
-        seen["ctx"], seen["pts"] = ctx, list(pts)
-        return assemble(ctx, pts, *args, **kwargs)
-
-    monkeypatch.setattr(_Context, "point", recording)
-    monkeypatch.setattr(arclength, "_assemble", keeping)
-    continuation(CFG, "omega", 280.0, 300.0, max_points=12, workers=1)
-    pts, ctx = seen["pts"], seen["ctx"]
+    pts, ctx, made = _kept_points(monkeypatch)
     assert [("J" in q) for q in pts] == [True] + [False] * (len(pts) - 1 - KEPT_JACOBIANS) + [True] * KEPT_JACOBIANS
     for q in pts:
-        J = made[id(q)]
+        J = made[id(q)][1]
         np.testing.assert_allclose(ctx.monodromy(q), J, rtol=0, atol=1e-12 * np.abs(J).max())
