@@ -77,8 +77,8 @@ def _tangent(A, previous):
     return t if np.dot(t, previous) >= 0 else -t
 
 
-#: The branch points that keep their orbit's record (``"Y"``, every step of the period: 72 kB on the pair, about 1 MB on
-#: a 24-blade ring): the last ones. Older points drop it (:meth:`_Context.orbit` makes it again where asked), so that a
+#: The branch points that keep their orbit's record (``"Y"``, every step of the period: 72 kB on the pair, 0.77 MB on
+#: the 24-blade ring): the last ones. Older points drop it (:meth:`_Context.orbit` makes it again where asked), so that a
 #: branch's memory does not grow with its points by the orbit's size.
 KEPT_ORBITS = 2
 #: The branch points that keep their monodromy matrix (``"J"``, physical units, beside the scaled Jacobian ``"A"`` that
