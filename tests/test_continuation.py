@@ -688,9 +688,13 @@ def test_a_step_back_beside_the_part_passed_with_its_stability_is_refused_across
     twice[0, 0], twice[1, 1] = 0.4, 0.5                    # two real multipliers above 1: det's sign as stable's
     assert _ran_back_unturned(ctx, pts, X, back, T, unstable, stable, 0.05)
     assert not _ran_back_unturned(ctx, pts, X, back, T, unstable, twice, 0.05)   # another stability there
-    # the same landing on a branch that passed those points going up in the field: it goes along them
-    up = [dict(q, X=q["X"] * np.array([1.0, 1.0, 1.0, -1.0])) for q in pts[:5]] + pts[5:]
-    assert not _ran_back_unturned(ctx, up, X, back * np.array([1.0, 1.0, 1.0, -1.0]), -T, unstable, stable, 0.05)
+    # the same landing, behind the last point, on stable points that the branch passed going up in the field before
+    # it turned down: it goes along them, the way they were passed
+    up = [dict(q, X=q["X"] * np.array([1.0, 1.0, 1.0, -1.0])) for q in pts[:5]] + \
+        [dict(q, X=q["X"] + np.array([0.0, 0.0, 0.0, 0.07])) for q in pts[5:]]
+    along = back * np.array([1.0, 1.0, 1.0, -1.0])
+    assert (along[-1] - up[-1]["X"][-1]) * T[-1] < 0   # behind the last point, as before
+    assert not _ran_back_unturned(ctx, up, up[-1]["X"], along, T, unstable, stable, 0.05)
     assert not _ran_back_unturned(ctx, pts, X, np.array([0.25, 0.5, 0.0, -0.025]), T, unstable, stable, 0.05)
 
 

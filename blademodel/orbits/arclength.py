@@ -58,7 +58,7 @@ from .corrector import (KEPT_JACOBIANS, KEPT_ORBITS, _Context, _at_kink, _field_
                         _tangent, _unstable_count)
 from .family import _Family
 from .period_map import FlowError, _copy, _key, kernel_mode
-from .self_overlap import NEAR, SelfOverlap, segment_ratios
+from .self_overlap import NEAR, SelfOverlap, segment_projections, segment_ratios
 from .shooting import (ROUNDING_LEVEL, ShootingError, _n_coordinates, _scale_of_excursions, below_rounding,
                        find_periodic_orbit, residual_size)
 
@@ -706,7 +706,7 @@ def _follow(ctx, pts, special, X, T, m, A, bounds, *, ds, ds_min, ds_max, max_po
             q = pts[k]
             _truncate(pts, special, overlap, k + 1, q["n_special"])
             X, T, A, m = q["X"], q["T"], q["A"], _copy(q["mode"])
-            ctx.scale = _scale_of_excursions(q["magnitude"], n_q, ctx.discrete)   # the scaling X, T and A were rescaled to
+            ctx.scale = q["scale"]   # the scaling X, T and A were rescaled to
             ds_max /= 2
             h = min(h, ds_max)
             landing, shots, jumped, ahead, switched, gap_tried = None, True, False, False, False, False
@@ -1100,8 +1100,8 @@ def _ran_back_unturned(ctx, pts, X, X_new, T, A, A_new, step) -> bool:
     if float(X_new[-1] - X[-1]) * float(T[-1]) >= 0 or len(pts) < 2:
         return False
     P = np.array([ctx.unknowns(q) for q in pts])
-    a, seg = P[:-1] - X_new, P[1:] - P[:-1]
-    near = np.flatnonzero(segment_ratios(a, P[1:] - X_new, step) <= NEAR)
+    ratios, at = segment_projections(P[:-1] - X_new, P[1:] - X_new, step)
+    near = np.flatnonzero(ratios <= NEAR)
     if near.size == 0:
         return False
     n = A.shape[0]
@@ -1114,9 +1114,8 @@ def _ran_back_unturned(ctx, pts, X, X_new, T, A, A_new, step) -> bool:
     count = _unstable_count(ctx.multipliers(A_new))
     way = float(X_new[-1] - X[-1])
     for k in near:
-        t = -float(np.dot(a[k], seg[k])) / max(float(np.dot(seg[k], seg[k])), 1e-300)
-        beside = pts[k] if t < 0.5 else pts[k + 1]
-        if beside["unstable"] == count and float(seg[k][-1]) * way < 0:
+        beside = pts[k] if at[k] < 0.5 else pts[k + 1]
+        if beside["unstable"] == count and float(P[k + 1, -1] - P[k, -1]) * way < 0:
             return True
     return False
 

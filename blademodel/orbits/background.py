@@ -92,7 +92,7 @@ class PendingPoint:
         """Begin (once the step that found it is taken): in the locator's thread, or now."""
         if self.future is None:
             # the locator holds the task until it has run; kept here too, its copies of the points around the
-            # grazing (their Jacobians: 0.3 MB on a 24-blade ring) would stay to the branch's end
+            # grazing (their orbits' records and Jacobians: 1.8 MB on a 24-blade ring) would stay to the branch's end
             self.future, self.task = self.locator.submit(self.task), None
 
     def done(self) -> bool:

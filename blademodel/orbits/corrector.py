@@ -562,10 +562,10 @@ class _Context:
             def finish(at):
                 return _special("grazing", at, index, multiplier)
             # located later, elsewhere (.background): on what the step has now (the points' dicts are
-            # rescaled later, their arrays never changed in place), without their orbits' records, which the
-            # location does not read and which the task would keep to the branch's end (KEPT_ORBITS); a border
-            # collision whose bracket holds the grazing is placed there (background.resolve): that is its kink
-            args = (self.scale.copy(), _without_orbit(a), _without_orbit(b), Xa.copy(), Ta, _copy(mode), tol)
+            # rescaled later, their arrays never changed in place; the task, and these copies with it, are let
+            # go once it has run: PendingPoint.start); a border collision whose bracket holds the grazing is placed
+            # there (background.resolve): that is its kink
+            args = (self.scale.copy(), dict(a), dict(b), Xa.copy(), Ta, _copy(mode), tol)
             found.append(PendingPoint(lambda ctx: _locate_grazings_in(ctx, *args), self.locator, finish, index,
                                       bracket, unlocated=_unlocated(b, _field_bracket(Xa, b["X"], self.span))))
         return found
@@ -894,11 +894,6 @@ def _field_bracket(X_lo, X_hi, span) -> tuple:
     """The field's values at two scaled points, lower first."""
     lo, hi = sorted((float(X_lo[-1] * span), float(X_hi[-1] * span)))
     return lo, hi
-
-
-def _without_orbit(q: dict) -> dict:
-    """A copy of the branch point ``q`` without its orbit's record (``"Y"``)."""
-    return {k: v for k, v in q.items() if k != "Y"}
 
 
 def _unlocated(b: dict, bracket) -> dict:

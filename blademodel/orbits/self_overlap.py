@@ -38,11 +38,17 @@ def segment_ratios(a: np.ndarray, b: np.ndarray, step: float) -> np.ndarray:
     """Each segment's distance from a point, over the longer of its length and ``step``: the segments run from the
     rows of ``a`` to those of ``b``, both taken from the point (a point *lies on* a segment where this is at most
     :data:`NEAR`)."""
+    return segment_projections(a, b, step)[0]
+
+
+def segment_projections(a: np.ndarray, b: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`segment_ratios` and where the point projects onto each segment, ``t`` from 0 at its start (``a``) to
+    1 at its end (``b``), clipped to the segment."""
     seg = b - a
     length2 = np.einsum("ij,ij->i", seg, seg)
     t = np.clip(-np.einsum("ij,ij->i", a, seg) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
     dist = np.linalg.norm(a + t[:, None] * seg, axis=1)
-    return dist / np.maximum(np.sqrt(length2), step)
+    return dist / np.maximum(np.sqrt(length2), step), t
 
 
 class SelfOverlap:

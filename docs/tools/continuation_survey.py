@@ -5,8 +5,8 @@ branch, its points, its special points by kind and why it ended (about 1 min). T
 ``docs/continuation.md`` ("How far branches get") comes from it. With ``--scan`` it runs the omega
 branches of both laws, both ways, at each longest step ``ds_max`` in :data:`SCAN` instead
 (about 3 min): whether the branches get through at every step length. With ``--iwan`` it runs the
-Iwan pair's branches (:data:`IWAN_JOBS`, about 4 min); with ``--elements 8`` as well, its omega branches both ways
-for the pair with that many Iwan elements (:data:`ELEMENT_JOBS`, about 3 min at 8).
+Iwan pair's branches (:data:`IWAN_JOBS`, about 4 min); with ``--elements 8`` instead, the omega branches both ways
+of the pair with that many Iwan elements (:data:`ELEMENT_JOBS`, about 3 min at 8).
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ JOBS = [(law, "omega", 150.0, 600.0) for law in ("coulomb", "bilinear")] + \
 IWAN_JOBS = [("omega", 150.0, 600.0, 1000), ("omega", 600.0, 150.0, 1000), ("omega", 150.0, 600.0, 2000),
              ("omega", 600.0, 150.0, 2000), ("gamma", 0.5, 10.0, 1000), ("F0", 5.0, 120.0, 1000),
              ("F0", 60.0, 1.0, 1000), ("gap", 1e-5, 2.5e-4, 1000), ("mu", 0.05, 1.0, 1000)]
-#: (field, start, stop, steps a period) of ``--iwan --elements N``: omega both ways for the pair with N Iwan elements.
+#: (field, start, stop, steps a period) of ``--elements N``: omega both ways for the pair with N Iwan elements.
 ELEMENT_JOBS = [("omega", 150.0, 600.0, 1000), ("omega", 600.0, 150.0, 1000)]
 #: The longest steps of ``--scan`` (the default is 0.05).
 SCAN = (0.02, 0.03, 0.05, 0.07, 0.1, 0.15, 0.2, 0.3)
